@@ -1,0 +1,8 @@
+# Installed by catkin (catkin_python_setup in CMakeLists.txt); do not run directly.
+from catkin_pkg.python_setup import generate_distutils_setup
+from setuptools import setup
+
+setup(**generate_distutils_setup(
+    packages=['closed_loop', 'closed_loop.nodes'],
+    package_dir={'': 'src'},
+))
