@@ -1,0 +1,25 @@
+# Two commands on a fresh Debian bookworm machine (as root):  make demo   and   make test
+# Both provision first: Debian's ROS 1 packages, the .venv with pinned PyPI packages, and the catkin
+# workspace in .ws/ -- each only if missing, so a second run installs nothing.
+SHELL := /bin/bash
+IN_ENV := source ./env.sh &&
+
+.PHONY: provision demo test unit rostest bench screenshot clean
+
+provision:
+	@bash tools/provision.sh
+
+demo: provision
+	@$(IN_ENV) python3 tools/demo.py $(DEMO_ARGS)
+
+test: provision
+	@$(IN_ENV) python3 tools/run_tests.py $(TEST_ARGS)
+
+unit: provision
+	@$(IN_ENV) python3 tools/run_tests.py --unit-only
+
+bench: provision
+	@$(IN_ENV) python3 tools/bench.py $(BENCH_ARGS)
+
+clean:
+	rm -rf .ws test_output

@@ -1,0 +1,90 @@
+"""Validated node settings: one dataclass per node holds every ``~parameter``, its default and unit.
+
+A settings class is a plain dataclass whose fields are made with :func:`param`. The ROS layer reads
+each field from the private parameter of the same name (``~stop_distance`` for ``stop_distance``),
+and :func:`from_params` converts and checks the values, raising :class:`SettingsError` with the
+parameter's name and what was expected. Defaults live here only; launch files override them.
+"""
+import dataclasses
+import math
+import typing
+
+
+class SettingsError(ValueError):
+    """A parameter value is unusable; the message names the parameter and what was expected."""
+
+
+def param(default, unit='', doc='', minimum=None, maximum=None, exclusive_minimum=False,
+          choices=None):
+    """A settings field: its default, unit, one-line meaning and the values it accepts."""
+    return dataclasses.field(default=default, metadata={
+        'unit': unit, 'doc': doc, 'minimum': minimum, 'maximum': maximum,
+        'exclusive_minimum': exclusive_minimum, 'choices': choices})
+
+
+def _coerce(name, kind, value):
+    """Convert ``value`` to ``kind`` the way a YAML/launch parameter is expected to arrive."""
+    if kind is bool:
+        if isinstance(value, bool):
+            return value
+        if isinstance(value, str) and value.lower() in ('true', 'false'):
+            return value.lower() == 'true'
+        raise SettingsError('~%s: expected true or false, got %r' % (name, value))
+    if kind is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise SettingsError('~%s: expected a number, got %r' % (name, value))
+        value = float(value)
+        if not math.isfinite(value):
+            raise SettingsError('~%s: expected a finite number, got %r' % (name, value))
+        return value
+    if kind is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, float) and value.is_integer():
+                return int(value)
+            raise SettingsError('~%s: expected an integer, got %r' % (name, value))
+        return value
+    if kind is str:
+        if not isinstance(value, str):
+            raise SettingsError('~%s: expected a string, got %r' % (name, value))
+        return value
+    return value
+
+
+def check(settings):
+    """Check every field of ``settings`` against its limits; raise SettingsError on the first bad one."""
+    hints = typing.get_type_hints(type(settings))
+    for f in dataclasses.fields(settings):
+        meta = f.metadata
+        value = _coerce(f.name, hints.get(f.name), getattr(settings, f.name))
+        object.__setattr__(settings, f.name, value)
+        unit = (' ' + meta.get('unit')) if meta.get('unit') else ''
+        low, high = meta.get('minimum'), meta.get('maximum')
+        if low is not None:
+            if meta.get('exclusive_minimum') and not value > low:
+                raise SettingsError('~%s: expected more than %g%s, got %r' % (f.name, low, unit, value))
+            if not value >= low:
+                raise SettingsError('~%s: expected at least %g%s, got %r' % (f.name, low, unit, value))
+        if high is not None and not value <= high:
+            raise SettingsError('~%s: expected at most %g%s, got %r' % (f.name, high, unit, value))
+        choices = meta.get('choices')
+        if choices is not None and value not in choices:
+            raise SettingsError('~%s: expected one of %s, got %r'
+                                % (f.name, ', '.join(map(str, choices)), value))
+    extra = getattr(settings, 'check_together', None)
+    if extra is not None:
+        extra()
+    return settings
+
+
+def from_params(cls, get_param):
+    """Build ``cls`` from ``get_param(name, default)`` (e.g. ``rospy.get_param`` with ``~`` names)."""
+    values = {}
+    for f in dataclasses.fields(cls):
+        values[f.name] = get_param('~' + f.name, f.default)
+    return check(cls(**values))
+
+
+def describe(cls):
+    """Rows of (name, default, unit, doc) for documentation and ``--help`` output."""
+    return [(f.name, f.default, f.metadata.get('unit', ''), f.metadata.get('doc', ''))
+            for f in dataclasses.fields(cls)]

@@ -1,0 +1,380 @@
+"""The simulation backend: a world and a differential-drive robot in pybullet, stepped at a fixed rate.
+
+One :class:`Simulation` owns one pybullet client; every pybullet call goes through it, from one thread.
+It knows nothing of ROS: the node hands it commands and reads scans, images, poses and contacts.
+
+Conventions (REP 103): metres, seconds of simulated time, radians, x forward, z up. The world frame is
+the ground truth frame; odometry starts at the robot's start pose.
+"""
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet
+
+from closed_loop import drive, robot_model, world as world_mod
+from closed_loop.settings import param
+
+GRAVITY_MPS2 = 9.81
+# Spawn the robot this far above the ground so no wheel starts inside it.
+SPAWN_CLEARANCE_M = 0.002
+# Wheels grip; the casters (collision spheres of base_link) slide.
+WHEEL_LATERAL_FRICTION = 1.0
+CASTER_LATERAL_FRICTION = 0.0
+# base_footprint has no inertial in the URDF (KDL rejects one on the root); pybullet would assume 1 kg.
+ROOT_LINK_MASS_KG = 0.001
+ROOT_LINK_INERTIA_KGM2 = 1e-7
+
+
+@dataclass
+class SimSettings:
+    """The simulator node's ``~parameters``; defaults here only."""
+    world: str = param('wall', '', 'world name in worlds/ or a path to a world YAML file')
+    gui: bool = param(False, '', "open pybullet's own window (needs a display)")
+    real_time_factor: float = param(1.0, '', 'simulated seconds per wall second; 0 = as fast as possible',
+                                    minimum=0.0)
+    physics_rate_hz: float = param(200.0, 'Hz', 'physics steps per simulated second (/clock is published '
+                                   'every step)', minimum=10.0, maximum=2000.0)
+    cmd_vel_timeout: float = param(0.5, 's', 'brake to zero when no command arrived for this long',
+                                   minimum=0.0, exclusive_minimum=True)
+    max_linear_speed: float = param(1.5, 'm/s', 'linear.x is clipped to +-this', minimum=0.0,
+                                    exclusive_minimum=True)
+    max_angular_speed: float = param(3.0, 'rad/s', 'angular.z is clipped to +-this', minimum=0.0,
+                                     exclusive_minimum=True)
+    max_linear_accel: float = param(2.0, 'm/s^2', 'linear acceleration and braking limit', minimum=0.0,
+                                    exclusive_minimum=True)
+    max_angular_accel: float = param(6.0, 'rad/s^2', 'angular acceleration limit', minimum=0.0,
+                                     exclusive_minimum=True)
+    wheel_max_torque: float = param(2.0, 'N m', 'torque each wheel motor can apply', minimum=0.0,
+                                    exclusive_minimum=True)
+    odom_rate_hz: float = param(50.0, 'Hz', '/odom, /base_pose_ground_truth, /joint_states and TF',
+                                minimum=0.0, exclusive_minimum=True)
+    scan_rate_hz: float = param(10.0, 'Hz', 'LIDAR scans per simulated second', minimum=0.0,
+                                exclusive_minimum=True)
+    scan_samples: int = param(360, '', 'rays per scan', minimum=1, maximum=8192)
+    scan_angle_min: float = param(-math.pi, 'rad', 'angle of the first ray (0 = straight ahead)',
+                                  minimum=-2 * math.pi, maximum=2 * math.pi)
+    scan_angle_max: float = param(math.pi, 'rad', 'end of the sweep; a full turn is [min, min + 2 pi)',
+                                  minimum=-2 * math.pi, maximum=2 * math.pi)
+    range_min: float = param(0.12, 'm', 'closer returns are reported as -inf (REP 117)', minimum=0.0)
+    range_max: float = param(3.5, 'm', 'no return within this is +inf (REP 117)', minimum=0.0,
+                             exclusive_minimum=True)
+    scan_noise_stddev: float = param(0.0, 'm', 'Gaussian noise added to each finite range', minimum=0.0)
+    noise_seed: int = param(0, '', 'seed of the noise generator (same seed, same noise)', minimum=0)
+    camera: bool = param(True, '', 'render and publish the camera')
+    camera_rate_hz: float = param(10.0, 'Hz', 'camera frames per simulated second', minimum=0.0,
+                                  exclusive_minimum=True)
+    camera_width: int = param(320, 'px', 'image width', minimum=8, maximum=4096)
+    camera_height: int = param(240, 'px', 'image height', minimum=8, maximum=4096)
+    camera_fov: float = param(1.085, 'rad', 'horizontal field of view', minimum=0.1, maximum=3.0)
+    camera_near: float = param(0.02, 'm', 'nearest rendered distance', minimum=0.001)
+    camera_far: float = param(30.0, 'm', 'farthest rendered distance', minimum=0.1)
+
+    def check_together(self):
+        from closed_loop.settings import SettingsError
+        if not self.range_max > self.range_min:
+            raise SettingsError('~range_max: expected more than ~range_min (%g m), got %r'
+                                % (self.range_min, self.range_max))
+        if not self.scan_angle_max > self.scan_angle_min:
+            raise SettingsError('~scan_angle_max: expected more than ~scan_angle_min (%g rad), got %r'
+                                % (self.scan_angle_min, self.scan_angle_max))
+        if self.scan_angle_max - self.scan_angle_min > 2 * math.pi + 1e-9:
+            raise SettingsError('~scan_angle_max: the sweep may be at most 2 pi rad, got %g rad'
+                                % (self.scan_angle_max - self.scan_angle_min))
+        if not self.camera_far > self.camera_near:
+            raise SettingsError('~camera_far: expected more than ~camera_near (%g m), got %r'
+                                % (self.camera_near, self.camera_far))
+
+
+@dataclass(frozen=True)
+class ScanLayout:
+    """The angle fields of the scans, as a LaserScan carries them (angle_max is the last ray's angle)."""
+    angle_min: float
+    angle_max: float
+    angle_increment: float
+    samples: int
+
+
+def scan_layout(angle_min, angle_max, samples):
+    """Ray angles for a sweep: a full turn gives ``samples`` rays over [min, min + 2 pi); a partial sweep
+    puts the first ray at ``angle_min`` and the last at ``angle_max``."""
+    span = angle_max - angle_min
+    if samples == 1:
+        return ScanLayout(angle_min, angle_min, 0.0, 1)
+    if abs(span - 2 * math.pi) < 1e-9:
+        increment = span / samples
+    else:
+        increment = span / (samples - 1)
+    return ScanLayout(angle_min, angle_min + increment * (samples - 1), increment, samples)
+
+
+@dataclass(frozen=True)
+class CameraIntrinsics:
+    """Pinhole intrinsics of the rendered image, OpenCV/ROS convention (pixel centres at integers)."""
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+
+
+def camera_intrinsics(width, height, horizontal_fov_rad):
+    """Square pixels; the principal point at the image centre, which is where OpenGL puts the axis."""
+    fx = 0.5 * width / math.tan(0.5 * horizontal_fov_rad)
+    return CameraIntrinsics(width, height, fx, fx, 0.5 * (width - 1), 0.5 * (height - 1))
+
+
+@dataclass(frozen=True)
+class Pose3D:
+    position: tuple     # (x, y, z) m
+    orientation: tuple  # quaternion (x, y, z, w)
+
+    @property
+    def yaw(self):
+        x, y, z, w = self.orientation
+        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaw_quaternion(yaw):
+    return (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
+
+
+class Simulation:
+    """A world and the robot in one pybullet client, advanced by :meth:`step`.
+
+    The robot's wheels are velocity-controlled joints in the physics; the commanded body twist is
+    validated by the caller, limited and ramped here, and braked to zero by the command watchdog.
+    """
+
+    def __init__(self, world, settings, urdf_path=None):
+        self.world = world
+        self.settings = settings
+        self.model = robot_model.load_robot_model(urdf_path or robot_model.default_urdf_path())
+        self.dt_s = 1.0 / settings.physics_rate_hz
+        self.layout = scan_layout(settings.scan_angle_min, settings.scan_angle_max, settings.scan_samples)
+        self.intrinsics = camera_intrinsics(settings.camera_width, settings.camera_height, settings.camera_fov)
+        self.watchdog = drive.CommandWatchdog(settings.cmd_vel_timeout)
+        self.odometry = drive.Odometry2D()
+        self._rng = np.random.default_rng(settings.noise_seed)
+        self._client = pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
+        if self._client < 0:
+            raise RuntimeError('pybullet could not start (gui=%s)' % settings.gui)
+        self.time_s = 0.0
+        self._world_start_s = 0.0
+        self._twist = drive.STOPPED
+        self._touching = set()
+        self.contact_count = 0
+        self._build()
+        self._precompute_rays()
+
+    # -- construction -------------------------------------------------------------------------------
+    def _call(self, fn, *args, **kwargs):
+        return fn(*args, physicsClientId=self._client, **kwargs)
+
+    def _build(self):
+        p = pybullet
+        self._call(p.resetSimulation)
+        self._call(p.setGravity, 0, 0, -GRAVITY_MPS2)
+        self._call(p.setTimeStep, self.dt_s)
+        if self.settings.gui:
+            self._call(p.configureDebugVisualizer, p.COV_ENABLE_GUI, 0)
+        ground_shape = self._call(p.createCollisionShape, p.GEOM_PLANE)
+        ground_visual = self._call(p.createVisualShape, p.GEOM_BOX, halfExtents=[50, 50, 0.001],
+                                   rgbaColor=list(self.world.ground_color))
+        self.ground_id = self._call(p.createMultiBody, 0, ground_shape, ground_visual)
+        self._call(p.changeDynamics, self.ground_id, -1, lateralFriction=1.0)
+        self.obstacle_ids = {}
+        self._obstacles = {}
+        for obstacle in self.world.obstacles:
+            uid = self._add_obstacle(obstacle)
+            self.obstacle_ids[uid] = obstacle.name
+            self._obstacles[uid] = obstacle
+        start = self.world.robot_start
+        self.robot_id = self._call(p.loadURDF, self.model.urdf_path,
+                                   basePosition=[start.x, start.y, SPAWN_CLEARANCE_M],
+                                   baseOrientation=yaw_quaternion(start.yaw),
+                                   flags=p.URDF_USE_INERTIA_FROM_FILE)
+        self._links = {}
+        self._joints = {}
+        for index in range(self._call(p.getNumJoints, self.robot_id)):
+            info = self._call(p.getJointInfo, self.robot_id, index)
+            self._joints[info[1].decode()] = index
+            self._links[info[12].decode()] = index
+        self._wheels = (self._joints[robot_model.LEFT_WHEEL_JOINT], self._joints[robot_model.RIGHT_WHEEL_JOINT])
+        self._call(p.changeDynamics, self.robot_id, -1, mass=ROOT_LINK_MASS_KG,
+                   localInertiaDiagonal=[ROOT_LINK_INERTIA_KGM2] * 3)
+        base_link = self._links['base_link']
+        self._call(p.changeDynamics, self.robot_id, base_link, lateralFriction=CASTER_LATERAL_FRICTION,
+                   spinningFriction=0.0, rollingFriction=0.0)
+        for wheel in self._wheels:
+            self._call(p.changeDynamics, self.robot_id, wheel, lateralFriction=WHEEL_LATERAL_FRICTION)
+        # Joints other than the wheels must not carry pybullet's default velocity motors.
+        self._drive_wheels(0.0, 0.0)
+
+    def _add_obstacle(self, obstacle):
+        p = pybullet
+        if obstacle.shape == 'box':
+            half = [0.5 * s for s in obstacle.size]
+            shape = self._call(p.createCollisionShape, p.GEOM_BOX, halfExtents=half)
+            visual = self._call(p.createVisualShape, p.GEOM_BOX, halfExtents=half, rgbaColor=list(obstacle.color))
+        else:
+            shape = self._call(p.createCollisionShape, p.GEOM_CYLINDER, radius=obstacle.radius,
+                               height=obstacle.size[2])
+            visual = self._call(p.createVisualShape, p.GEOM_CYLINDER, radius=obstacle.radius,
+                                length=obstacle.size[2], rgbaColor=list(obstacle.color))
+        return self._call(p.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
+                          baseOrientation=yaw_quaternion(obstacle.yaw))
+
+    def _precompute_rays(self):
+        layout = self.layout
+        angles = layout.angle_min + layout.angle_increment * np.arange(layout.samples)
+        self._ray_dirs = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
+
+    # -- commands and stepping ----------------------------------------------------------------------
+    def command(self, twist):
+        """Follow a validated :class:`drive.BodyTwist` from now until the watchdog expires."""
+        self.watchdog.accept(twist, self.time_s)
+
+    def _drive_wheels(self, left_rps, right_rps):
+        self._call(pybullet.setJointMotorControlArray, self.robot_id, list(self._wheels), pybullet.VELOCITY_CONTROL,
+                   targetVelocities=[left_rps, right_rps],
+                   forces=[self.settings.wheel_max_torque] * 2)
+
+    def step(self):
+        """Advance one physics step of ``dt_s`` seconds; returns the new simulated time."""
+        s = self.settings
+        target = drive.limit_twist(self.watchdog.target(self.time_s), s.max_linear_speed, s.max_angular_speed)
+        self._twist = drive.ramp(self._twist, target, s.max_linear_accel, s.max_angular_accel, self.dt_s)
+        left, right = drive.wheel_speeds(self._twist, self.model.wheel_separation_m, self.model.wheel_radius_m)
+        self._drive_wheels(left, right)
+        self._move_obstacles(self.time_s + self.dt_s)
+        self._call(pybullet.stepSimulation)
+        self.time_s += self.dt_s
+        wl, wr = self.wheel_velocities()
+        self.odometry.integrate(drive.body_twist(wl, wr, self.model.wheel_separation_m, self.model.wheel_radius_m),
+                                self.dt_s)
+        return self.time_s
+
+    def _move_obstacles(self, t_s):
+        for uid, obstacle in self._obstacles.items():
+            if obstacle.motion is None:
+                continue
+            x, y = world_mod.moving_obstacle_xy(obstacle, t_s - self._world_start_s)
+            self._call(pybullet.resetBasePositionAndOrientation, uid, [x, y, obstacle.position[2]],
+                       yaw_quaternion(obstacle.yaw))
+
+    def reset_world(self):
+        """Put the robot back at its start, at rest, with odometry at zero; moving obstacles restart."""
+        start = self.world.robot_start
+        self._call(pybullet.resetBasePositionAndOrientation, self.robot_id, [start.x, start.y, SPAWN_CLEARANCE_M],
+                   yaw_quaternion(start.yaw))
+        self._call(pybullet.resetBaseVelocity, self.robot_id, [0, 0, 0], [0, 0, 0])
+        for joint in self._joints.values():
+            self._call(pybullet.resetJointState, self.robot_id, joint, 0.0, 0.0)
+        self._twist = drive.STOPPED
+        self.watchdog.clear()
+        self.odometry.reset()
+        self._world_start_s = self.time_s
+        self._move_obstacles(self.time_s)
+        self._touching = set()
+        self.contact_count = 0
+
+    # -- state ------------------------------------------------------------------------------------------
+    def wheel_velocities(self):
+        states = self._call(pybullet.getJointStates, self.robot_id, list(self._wheels))
+        return states[0][1], states[1][1]
+
+    def wheel_positions(self):
+        states = self._call(pybullet.getJointStates, self.robot_id, list(self._wheels))
+        return states[0][0], states[1][0]
+
+    def ground_truth(self):
+        """(pose of base_footprint in the world frame, (linear xyz, angular xyz) in the world frame)."""
+        position, orientation = self._call(pybullet.getBasePositionAndOrientation, self.robot_id)
+        linear, angular = self._call(pybullet.getBaseVelocity, self.robot_id)
+        return Pose3D(tuple(position), tuple(orientation)), (tuple(linear), tuple(angular))
+
+    def link_pose(self, link_name):
+        """World pose of a URDF link frame (not its centre of mass)."""
+        state = self._call(pybullet.getLinkState, self.robot_id, self._links[link_name],
+                           computeForwardKinematics=True)
+        return Pose3D(tuple(state[4]), tuple(state[5]))
+
+    def commanded_twist(self):
+        """The ramped twist the wheels are being driven at."""
+        return self._twist
+
+    # -- sensors ----------------------------------------------------------------------------------------
+    def scan(self):
+        """One LIDAR sweep from base_scan: float32 ranges in m, from the sensor origin (REP 117 values).
+
+        Each ray is cast from ``range_min`` to ``range_max``; a hit reports its full distance from the
+        origin. A second, short cast from the origin to ``range_min`` finds obstacles too close to measure,
+        reported as -inf. No return is +inf.
+        """
+        s = self.settings
+        pose = self.link_pose(robot_model.SCAN_FRAME)
+        rotation = np.array(self._call(pybullet.getMatrixFromQuaternion, pose.orientation)).reshape(3, 3)
+        dirs = self._ray_dirs @ rotation.T
+        origin = np.asarray(pose.position)
+        near_from = np.repeat(origin[None, :], len(dirs), axis=0)
+        start = origin + dirs * s.range_min
+        end = origin + dirs * s.range_max
+        ray_from = np.concatenate([start, near_from]) if s.range_min > 0 else start
+        ray_to = np.concatenate([end, start]) if s.range_min > 0 else end
+        hits = self._call(pybullet.rayTestBatch, ray_from.tolist(), ray_to.tolist())
+        n = len(dirs)
+        ranges = np.full(n, np.inf, dtype=np.float64)
+        span = s.range_max - s.range_min
+        for i in range(n):
+            uid, fraction = hits[i][0], hits[i][2]
+            if uid >= 0 and uid != self.robot_id:
+                ranges[i] = s.range_min + fraction * span
+        if s.range_min > 0:
+            for i in range(n):
+                uid = hits[n + i][0]
+                if uid >= 0 and uid != self.robot_id:
+                    ranges[i] = -np.inf
+        if s.scan_noise_stddev > 0:
+            finite = np.isfinite(ranges)
+            noisy = ranges[finite] + self._rng.normal(0.0, s.scan_noise_stddev, int(finite.sum()))
+            ranges[finite] = np.clip(noisy, s.range_min, s.range_max)
+        return ranges.astype(np.float32)
+
+    def render_camera(self):
+        """An RGB image (height, width, 3) uint8 from camera_link, looking along its +x axis."""
+        s = self.settings
+        pose = self.link_pose(robot_model.CAMERA_FRAME)
+        rotation = np.array(self._call(pybullet.getMatrixFromQuaternion, pose.orientation)).reshape(3, 3)
+        eye = np.asarray(pose.position)
+        view = self._call(pybullet.computeViewMatrix, eye.tolist(), (eye + rotation[:, 0]).tolist(),
+                          rotation[:, 2].tolist())
+        vertical_fov = 2.0 * math.atan(math.tan(0.5 * s.camera_fov) * s.camera_height / s.camera_width)
+        projection = self._call(pybullet.computeProjectionMatrixFOV, math.degrees(vertical_fov),
+                                s.camera_width / s.camera_height, s.camera_near, s.camera_far)
+        _, _, rgba, _, _ = self._call(pybullet.getCameraImage, s.camera_width, s.camera_height, view, projection,
+                                      renderer=pybullet.ER_TINY_RENDERER,
+                                      flags=pybullet.ER_NO_SEGMENTATION_MASK)
+        rgba = np.asarray(rgba, dtype=np.uint8).reshape(s.camera_height, s.camera_width, 4)
+        return np.ascontiguousarray(rgba[:, :, :3])
+
+    def new_contacts(self):
+        """Names of obstacles the robot has started touching since the last call (ground excluded)."""
+        touching = set()
+        for contact in self._call(pybullet.getContactPoints, bodyA=self.robot_id):
+            other = contact[2]
+            if other in self.obstacle_ids:
+                touching.add(other)
+        began = touching - self._touching
+        self._touching = touching
+        self.contact_count += len(began)
+        return sorted(self.obstacle_ids[uid] for uid in began)
+
+    def touching(self):
+        return sorted(self.obstacle_ids[uid] for uid in self._touching)
+
+    def close(self):
+        if self._client is not None and self._client >= 0:
+            pybullet.disconnect(physicsClientId=self._client)
+            self._client = None

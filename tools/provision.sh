@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Provision what is missing, and nothing else: Debian's ROS 1 packages, the virtual environment with the
+# pinned PyPI packages, and the catkin workspace in .ws/. A second run installs nothing.
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+
+# Debian bookworm's own ROS 1 (in /usr) and the tools the tests use.
+APT_PACKAGES=(
+  catkin python3-catkin-pkg python3-setuptools python3-venv python3-pip python3-pytest python3-yaml
+  python3-rospy python3-rostest python3-rosbag python3-roslaunch python3-rosnode python3-rostopic
+  python3-rosservice python3-rosparam python3-rosmsg python3-rosgraph-msgs python3-tf2-ros python3-tf2-msgs
+  python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
+  python3-visualization-msgs
+  ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs
+  librostest-dev rosout rosbash ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
+)
+missing=()
+for p in "${APT_PACKAGES[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "provision: installing Debian packages: ${missing[*]}"
+  if [ "$(id -u)" != 0 ]; then
+    echo "provision: need root for apt-get (run as root, or install the packages above)" >&2
+    exit 1
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update -qq
+  apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# Virtual environment from Debian's interpreter (the one its ROS is built for), seeing Debian's packages.
+venv="$root/.venv"
+req_stamp="$venv/.requirements.sha256"
+if [ ! -x "$venv/bin/python3" ] || [ "$("$venv/bin/python3" -c 'import sys; print(sys.base_prefix)')" != /usr ]; then
+  echo "provision: creating $venv from /usr/bin/python3"
+  rm -rf "$venv"
+  /usr/bin/python3 -m venv --system-site-packages "$venv"
+fi
+want=$(sha256sum requirements.txt | cut -d' ' -f1)
+if [ "$(cat "$req_stamp" 2>/dev/null)" != "$want" ]; then
+  echo "provision: installing requirements.txt into $venv"
+  "$venv/bin/python3" -m pip install -q --disable-pip-version-check -r requirements.txt
+  echo "$want" > "$req_stamp"
+fi
+export PATH="$venv/bin:$PATH"
+
+# The catkin workspace: .ws/src/closed_loop is this repo.
+ws="$root/.ws"
+mkdir -p "$ws/src"
+[ -L "$ws/src/closed_loop" ] || ln -sfn "$root" "$ws/src/closed_loop"
+build_stamp="$ws/.build.sha256"
+want=$( (cat CMakeLists.txt package.xml setup.py; ls scripts launch test/rostest 2>/dev/null; command -v python3) \
+        | sha256sum | cut -d' ' -f1)
+if [ ! -f "$ws/devel/setup.bash" ] || [ "$(cat "$build_stamp" 2>/dev/null)" != "$want" ]; then
+  echo "provision: catkin_make in $ws"
+  (cd "$ws" && catkin_make -DPYTHON_EXECUTABLE="$venv/bin/python3" -DCATKIN_ENABLE_TESTING=ON > "$ws/catkin_make.log" 2>&1) \
+    || { tail -n 40 "$ws/catkin_make.log"; echo "provision: catkin_make failed (log: $ws/catkin_make.log)" >&2; exit 1; }
+  echo "$want" > "$build_stamp"
+fi

@@ -1,0 +1,130 @@
+#!/usr/bin/env python3
+"""Run every test of closed_loop -- pytest unit tests, then each rostest -- and print one closing line.
+
+Usage (inside ``source env.sh``; ``make test`` does that):
+    python3 tools/run_tests.py [--unit-only] [--rostest-only] [-k NAME]
+
+Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed``
+(pytest and rostest counted together); the exit status is non-zero if anything failed or nothing ran.
+"""
+import argparse
+import glob
+import os
+import shutil
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
+OUT = os.path.join(ROOT, 'test_output')
+# A rostest file that hangs past this is killed and counted failed; each file also has its own time-limit.
+ROSTEST_HANG_LIMIT_S = 300
+
+
+def count_junit(path):
+    """(passed, failed, skipped, failed test names) from one JUnit XML file."""
+    passed = failed = skipped = 0
+    names = []
+    root = ET.parse(path).getroot()
+    for case in root.iter('testcase'):
+        name = '%s.%s' % (case.get('classname', ''), case.get('name', ''))
+        if case.find('failure') is not None or case.find('error') is not None:
+            failed += 1
+            names.append(name)
+        elif case.find('skipped') is not None:
+            skipped += 1
+        else:
+            passed += 1
+    return passed, failed, skipped, names
+
+
+def run_unit(args):
+    xml = os.path.join(OUT, 'unit.xml')
+    cmd = [sys.executable, '-m', 'pytest', os.path.join(ROOT, 'test', 'unit'), '-q', '-p', 'no:cacheprovider',
+           '--junitxml', xml]
+    if args.k:
+        cmd += ['-k', args.k]
+    print('== unit tests: %s' % ' '.join(cmd[2:]), flush=True)
+    code = subprocess.call(cmd, cwd=ROOT)
+    if not os.path.exists(xml):
+        return 0, 1, 0, ['pytest (exit %d, no results)' % code]
+    passed, failed, skipped, names = count_junit(xml)
+    if code not in (0, 5) and failed == 0:
+        failed, names = 1, ['pytest (exit %d)' % code]
+    return passed, failed, skipped, names
+
+
+def run_rostests(args):
+    files = sorted(glob.glob(os.path.join(ROOT, 'test', 'rostest', '*.test')))
+    if args.k:
+        files = [f for f in files if args.k in os.path.basename(f)]
+    totals = [0, 0, 0, []]
+    results_dir = os.path.join(OUT, 'rostest')
+    os.makedirs(results_dir, exist_ok=True)
+    for path in files:
+        name = os.path.splitext(os.path.basename(path))[0]
+        log = os.path.join(results_dir, name + '.log')
+        env = dict(os.environ, ROS_HOME=os.path.join(OUT, 'ros_home'), ROS_LOG_DIR=os.path.join(OUT, 'ros_log', name),
+                   CLOSED_LOOP_TEST_OUTPUT=os.path.join(OUT, name))
+        cmd = ['rostest', '--results-base-dir', results_dir, '--results-filename', name + '.xml',
+               'closed_loop', os.path.basename(path)]
+        started = time.monotonic()
+        print('== rostest %s ...' % name, end=' ', flush=True)
+        with open(log, 'w') as out:
+            try:
+                code = subprocess.call(cmd, stdout=out, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
+                                       timeout=ROSTEST_HANG_LIMIT_S)
+            except subprocess.TimeoutExpired:
+                code = 'timeout'
+        xmls = glob.glob(os.path.join(results_dir, '**', name + '.xml'), recursive=True)
+        p = f = s = 0
+        names = []
+        if xmls:
+            p, f, s, names = count_junit(xmls[0])
+        if code != 0 and f == 0:
+            f, names = f + 1, names + ['%s (rostest exit %s, see %s)' % (name, code, log)]
+        if p + f == 0:
+            f, names = 1, ['%s (no test ran, see %s)' % (name, log)]
+        print('%d passed, %d failed (%.0f s)' % (p, f, time.monotonic() - started), flush=True)
+        if f:
+            with open(log) as text:
+                tail = text.read()[-3000:]
+            print('   --- tail of %s ---\n%s' % (log, tail), flush=True)
+        totals[0] += p
+        totals[1] += f
+        totals[2] += s
+        totals[3] += names
+    return tuple(totals)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--unit-only', action='store_true')
+    parser.add_argument('--rostest-only', action='store_true')
+    parser.add_argument('-k', help='only tests (pytest -k) / rostest files whose name contains this')
+    args = parser.parse_args()
+    shutil.rmtree(OUT, ignore_errors=True)
+    os.makedirs(OUT)
+    passed = failed = skipped = 0
+    failures = []
+    parts = []
+    if not args.rostest_only:
+        parts.append(run_unit)
+    if not args.unit_only:
+        parts.append(run_rostests)
+    for part in parts:
+        p, f, s, names = part(args)
+        passed, failed, skipped = passed + p, failed + f, skipped + s
+        failures += names
+    for name in failures:
+        print('FAILED: %s' % name)
+    line = 'tests: %d passed, %d failed' % (passed, failed)
+    if skipped:
+        line += ', %d skipped' % skipped
+    print(line)
+    return 1 if failed or passed == 0 else 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
