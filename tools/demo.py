@@ -1,0 +1,190 @@
+#!/usr/bin/env python3
+"""`make demo`: run demo.launch headless for a bounded time, show a live status line, then summarise
+what the robot did, from the simulator's ground truth.
+
+Usage (inside ``source env.sh``): python3 tools/demo.py [--world wall] [--controller stop_on_obstacle]
+                                                        [--seconds 30] [launch args, e.g. gui:=true]
+"""
+import argparse
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
+sys.path.insert(0, os.path.join(ROOT, 'src'))
+
+from closed_loop import world as world_mod  # noqa: E402
+
+STATUS_PERIOD_S = 1.0
+AT_REST_MPS = 0.01
+# Once the robot has moved and then stayed at rest this long, the demo has shown what it came for.
+REST_TO_FINISH_S = 2.0
+MASTER_WAIT_S = 30.0
+# Half the length of the robot's body along x (urdf/robot.urdf: base_link box 0.30 m), from the LIDAR axis.
+BODY_FRONT_FROM_LIDAR_M = 0.15
+
+
+def clearance_to_obstacles(world, x, y):
+    """Smallest ground-plane distance (m) from point (x, y) to any obstacle's footprint, and its name."""
+    best = (math.inf, None)
+    for ob in world.obstacles:
+        if ob.shape == 'cylinder':
+            d = math.hypot(x - ob.position[0], y - ob.position[1]) - ob.radius
+        else:
+            c, s = math.cos(-ob.yaw), math.sin(-ob.yaw)
+            dx, dy = x - ob.position[0], y - ob.position[1]
+            lx, ly = c * dx - s * dy, s * dx + c * dy
+            qx, qy = abs(lx) - 0.5 * ob.size[0], abs(ly) - 0.5 * ob.size[1]
+            d = math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0)
+        if d < best[0]:
+            best = (d, ob.name)
+    return best
+
+
+class Monitor:
+    """Subscribes to what the demo shows and keeps the latest values."""
+
+    def __init__(self, controller):
+        import rospy
+        from geometry_msgs.msg import Twist
+        from nav_msgs.msg import Odometry
+        from std_msgs.msg import Bool, Float32, String, UInt32
+        self.lock = threading.Lock()
+        self.truth = None
+        self.cmd = None
+        self.zone = None
+        self.distance = None
+        self.red = None
+        self.contacts = 0
+        self.moved = False
+        self.rest_since = None
+        self.path_m = 0.0
+        self.last_xy = None
+        self.zone_changes = []
+        rospy.Subscriber('/base_pose_ground_truth', Odometry, self._on_truth, queue_size=10)
+        rospy.Subscriber('/cmd_vel', Twist, lambda m: self._set('cmd', m.linear.x), queue_size=10)
+        rospy.Subscriber('/obstacle_distance', Float32, lambda m: self._set('distance', m.data), queue_size=10)
+        rospy.Subscriber('/red_detected', Bool, lambda m: self._set('red', m.data), queue_size=10)
+        rospy.Subscriber('/contact_count', UInt32, lambda m: self._set('contacts', m.data), queue_size=10)
+        rospy.Subscriber('/%s/zone' % controller, String, self._on_zone, queue_size=10)
+        rospy.Subscriber('/%s/state' % controller, String, self._on_zone, queue_size=10)
+
+    def _set(self, name, value):
+        with self.lock:
+            setattr(self, name, value)
+
+    def _on_zone(self, msg):
+        with self.lock:
+            if msg.data != self.zone and self.truth is not None:
+                self.zone_changes.append((self.truth.header.stamp.to_sec(), msg.data,
+                                          self.truth.pose.pose.position.x, self.truth.pose.pose.position.y))
+            self.zone = msg.data
+
+    def _on_truth(self, msg):
+        with self.lock:
+            self.truth = msg
+            p = msg.pose.pose.position
+            if self.last_xy is not None:
+                self.path_m += math.hypot(p.x - self.last_xy[0], p.y - self.last_xy[1])
+            self.last_xy = (p.x, p.y)
+            speed = math.hypot(msg.twist.twist.linear.x, msg.twist.twist.linear.y)
+            if speed > AT_REST_MPS * 5:
+                self.moved = True
+                self.rest_since = None
+            elif self.rest_since is None:
+                self.rest_since = time.monotonic()
+
+
+def fmt(value, unit='', spec='%.2f'):
+    if value is None:
+        return '-'
+    return (spec % value) + unit
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--world', default='wall')
+    parser.add_argument('--controller', default='stop_on_obstacle')
+    parser.add_argument('--seconds', type=float, default=30.0, help='wall-clock bound of the run')
+    parser.add_argument('launch_args', nargs='*', help='extra roslaunch args (name:=value)')
+    args = parser.parse_args()
+
+    world = world_mod.load_world(world_mod.resolve_world(args.world, os.path.join(ROOT, 'worlds')))
+    log_path = os.path.join(ROOT, 'test_output', 'demo.log')
+    os.makedirs(os.path.dirname(log_path), exist_ok=True)
+    cmd = ['roslaunch', 'closed_loop', 'demo.launch', 'world:=' + args.world,
+           'controller:=' + args.controller] + args.launch_args
+    print('demo: %s   (full log: %s)' % (' '.join(cmd), log_path), flush=True)
+    log = open(log_path, 'w')
+    launch = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        import rosgraph
+        import rospy
+        deadline = time.monotonic() + MASTER_WAIT_S
+        while not rosgraph.is_master_online():
+            if launch.poll() is not None or time.monotonic() > deadline:
+                print('demo: roslaunch did not bring up a master; see %s' % log_path)
+                return 1
+            time.sleep(0.2)
+        rospy.init_node('demo_monitor', anonymous=True, disable_signals=True)
+        mon = Monitor(args.controller)
+        started = time.monotonic()
+        next_status = started
+        while time.monotonic() - started < args.seconds:
+            if launch.poll() is not None:
+                print('\ndemo: roslaunch exited early (code %s); see %s' % (launch.returncode, log_path))
+                return 1
+            now = time.monotonic()
+            with mon.lock:
+                truth, done = mon.truth, (mon.moved and mon.rest_since is not None
+                                          and now - mon.rest_since > REST_TO_FINISH_S)
+                if now >= next_status and truth is not None:
+                    next_status += STATUS_PERIOD_S
+                    p = truth.pose.pose.position
+                    print('  t=%5.1fs  x=%5.2f y=%5.2f m  speed=%4.2f m/s  cmd=%s  %s  nearest=%s  red=%s  contacts=%d'
+                          % (truth.header.stamp.to_sec(), p.x, p.y, math.hypot(truth.twist.twist.linear.x,
+                                                                                truth.twist.twist.linear.y),
+                             fmt(mon.cmd, ' m/s'), mon.zone or '-', fmt(mon.distance, ' m'),
+                             '-' if mon.red is None else ('yes' if mon.red else 'no'), mon.contacts),
+                          flush=True)
+            if done:
+                break
+            time.sleep(0.05)
+        with mon.lock:
+            truth = mon.truth
+            if truth is None:
+                print('demo: no ground truth arrived; see %s' % log_path)
+                return 1
+            p = truth.pose.pose.position
+            start = world.robot_start
+            clearance, nearest = clearance_to_obstacles(world, p.x, p.y)
+            print('\nWhat the robot did (ground truth, world "%s", controller %s):' % (world.name, args.controller))
+            for t, zone, x, y in mon.zone_changes:
+                print('  t=%5.1fs  %-12s at x=%.2f y=%.2f m' % (t, zone, x, y))
+            print('  drove %.2f m: from (%.2f, %.2f) to (%.2f, %.2f); %s'
+                  % (mon.path_m, start.x, start.y, p.x, p.y,
+                     'at rest' if mon.rest_since is not None else 'still moving'))
+            if nearest is not None:
+                print('  LIDAR clearance to the nearest obstacle (%s): %.3f m; body front: about %.3f m'
+                      % (nearest, clearance, clearance - BODY_FRONT_FROM_LIDAR_M))
+            print('  contacts: %s' % ('none' if mon.contacts == 0 else '%d (the robot touched something)'
+                                      % mon.contacts))
+            return 0 if mon.contacts == 0 else 1
+    finally:
+        try:
+            os.killpg(launch.pid, signal.SIGINT)
+            launch.wait(timeout=15)
+        except (ProcessLookupError, subprocess.TimeoutExpired):
+            try:
+                os.killpg(launch.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+        log.close()
+
+
+if __name__ == '__main__':
+    sys.exit(main())
