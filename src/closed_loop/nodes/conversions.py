@@ -1,0 +1,36 @@
+"""Message <-> plain value conversions for the scan and velocity nodes."""
+from geometry_msgs.msg import Twist
+
+from closed_loop.commands import validate_command
+from closed_loop.nodes.common import stamp_to_sec
+from closed_loop.scan import Scan
+
+
+def scan_from_msg(msg):
+    """A core :class:`closed_loop.scan.Scan` copied from a ``sensor_msgs/LaserScan``.
+
+    Nothing is checked here; call :func:`closed_loop.scan.validate_scan` (the geometry functions do).
+    """
+    return Scan(stamp_s=stamp_to_sec(msg.header.stamp), frame_id=msg.header.frame_id,
+                angle_min=msg.angle_min, angle_max=msg.angle_max,
+                angle_increment=msg.angle_increment, time_increment=msg.time_increment,
+                scan_time=msg.scan_time, range_min=msg.range_min, range_max=msg.range_max,
+                ranges=msg.ranges)
+
+
+def twist(linear_x, angular_z):
+    """A ``geometry_msgs/Twist`` with forward speed (m/s) and yaw rate (rad/s), all else zero.
+
+    Raises :class:`closed_loop.commands.CommandError` on NaN, inf or non-numbers, so an invalid
+    command is never published.
+    """
+    command = validate_command(linear_x, angular_z)
+    msg = Twist()
+    msg.linear.x = command.linear_x
+    msg.angular.z = command.angular_z
+    return msg
+
+
+def twist_from_command(command):
+    """A ``geometry_msgs/Twist`` from a :class:`closed_loop.commands.VelocityCommand`."""
+    return twist(command.linear_x, command.angular_z)

@@ -1,0 +1,74 @@
+"""obstacle_detector: the nearest obstacle overall and per sector, from each laser scan."""
+import math
+
+import rospy
+from sensor_msgs.msg import LaserScan
+from std_msgs.msg import Float32
+
+from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.conversions import scan_from_msg
+from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
+                              nearest, sector_readings)
+
+# How often a repeated warning or error may reappear in the log (s).
+LOG_PERIOD_S = 2.0
+
+
+class ObstacleDetector:
+    """Publishes obstacle distances for every scan it receives.
+
+    Distances follow REP 117: +inf when every valid ray is clear, NaN when no ray is valid (or the
+    scan is malformed); never a made-up number.
+
+    Subscriptions:
+        ``scan`` (sensor_msgs/LaserScan).
+    Publications (std_msgs/Float32, m, one message each per scan):
+        ``obstacle_distance``: nearest obstacle over the whole scan.
+        ``obstacle_distance/front``: within ``~front_half_angle`` of 0 (forward).
+        ``obstacle_distance/left``: within ``~side_half_angle`` of +pi/2.
+        ``obstacle_distance/right``: within ``~side_half_angle`` of -pi/2.
+    Parameters:
+        ``~front_half_angle`` (rad, default pi/2): half-width of the front sector.
+        ``~side_half_angle`` (rad, default pi/4): half-width of the left and right sectors.
+        ``~warn_distance`` (m, default 0.5): log a (throttled) warning when the nearest obstacle is
+        closer than this.
+    """
+
+    def __init__(self):
+        self._settings = load_settings(DetectorSettings)
+        self._nearest_pub = rospy.Publisher('obstacle_distance', Float32, queue_size=1)
+        self._sector_pubs = {name: rospy.Publisher('obstacle_distance/' + name, Float32,
+                                                   queue_size=1)
+                             for name in SECTOR_CENTRES_RAD}
+        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
+
+    def _on_scan(self, msg):
+        # The output is the per-scan conversion itself, so it is published from the callback.
+        try:
+            scan = scan_from_msg(msg)
+            overall = nearest(scan)
+            sectors = sector_readings(scan, self._settings)
+        except ScanError as error:
+            rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
+            self._publish_all(math.nan, {name: math.nan for name in self._sector_pubs})
+            return
+        self._publish_all(overall.distance_m,
+                          {name: reading.distance_m for name, reading in sectors.items()})
+        if not overall.trusted:
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'scan has %s', describe_reading(overall))
+        elif overall.distance_m < self._settings.warn_distance:
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'Obstacle close: %.2f m', overall.distance_m)
+        else:
+            rospy.logdebug_throttle(LOG_PERIOD_S, 'Clear: nearest obstacle %.2f m',
+                                    overall.distance_m)
+
+    def _publish_all(self, nearest_m, sector_m):
+        self._nearest_pub.publish(Float32(data=nearest_m))
+        for name, publisher in self._sector_pubs.items():
+            publisher.publish(Float32(data=sector_m[name]))
+
+
+def main():
+    rospy.init_node('obstacle_detector')
+    ObstacleDetector()
+    rospy.spin()

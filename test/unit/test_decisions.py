@@ -1,0 +1,211 @@
+"""Stop / slow / cruise: lesson boundaries, hysteresis, and stop on bad input."""
+import math
+import threading
+
+import pytest
+
+from closed_loop.decisions import (Decision, DecisionError, SilenceWatchdog, StopSettings, Zone,
+                                   classify_zone, decide, input_problem, speed_for_zone, stop)
+from closed_loop.scan import SectorReading
+from closed_loop.settings import SettingsError, check
+
+SETTINGS = check(StopSettings())
+
+
+def reading(distance_m, valid=181, total=181):
+    return SectorReading(distance_m=distance_m, valid=valid, total=total)
+
+
+def test_defaults_are_the_lessons():
+    assert (SETTINGS.stop_distance, SETTINGS.slow_distance) == (0.5, 1.0)
+    assert (SETTINGS.slow_speed, SETTINGS.cruise_speed) == (0.2, 0.5)
+    assert SETTINGS.front_half_angle == pytest.approx(math.pi / 2)
+    assert SETTINGS.rate_hz == 10.0
+
+
+# --- boundaries without history (the lesson's strict "<") -------------------------------------
+
+@pytest.mark.parametrize('distance, zone', [
+    (0.0, Zone.STOP), (0.499, Zone.STOP), (0.5, Zone.SLOW), (0.999, Zone.SLOW), (1.0, Zone.CLEAR),
+    (math.inf, Zone.CLEAR), (-math.inf, Zone.STOP), (math.nan, Zone.STOP)])
+def test_zone_boundaries(distance, zone):
+    assert classify_zone(distance, None, SETTINGS) is zone
+
+
+def test_speeds_per_zone():
+    assert speed_for_zone(Zone.CLEAR, SETTINGS) == 0.5
+    assert speed_for_zone(Zone.SLOW, SETTINGS) == 0.2
+    assert speed_for_zone(Zone.STOP, SETTINGS) == 0.0
+
+
+# --- hysteresis ---------------------------------------------------------------------------------
+
+def test_entering_a_more_dangerous_zone_is_immediate():
+    assert classify_zone(0.999, Zone.CLEAR, SETTINGS) is Zone.SLOW
+    assert classify_zone(0.499, Zone.SLOW, SETTINGS) is Zone.STOP
+    assert classify_zone(0.499, Zone.CLEAR, SETTINGS) is Zone.STOP
+
+
+def test_leaving_stop_needs_the_hysteresis_margin():
+    assert classify_zone(0.5, Zone.STOP, SETTINGS) is Zone.STOP
+    assert classify_zone(0.549, Zone.STOP, SETTINGS) is Zone.STOP
+    assert classify_zone(0.55, Zone.STOP, SETTINGS) is Zone.SLOW
+
+
+def test_leaving_slow_needs_the_hysteresis_margin():
+    assert classify_zone(1.0, Zone.SLOW, SETTINGS) is Zone.SLOW
+    assert classify_zone(1.049, Zone.SLOW, SETTINGS) is Zone.SLOW
+    assert classify_zone(1.05, Zone.SLOW, SETTINGS) is Zone.CLEAR
+
+
+def test_leaving_stop_steps_through_slow():
+    assert classify_zone(1.02, Zone.STOP, SETTINGS) is Zone.SLOW
+    assert classify_zone(1.05, Zone.STOP, SETTINGS) is Zone.CLEAR
+    assert classify_zone(math.inf, Zone.STOP, SETTINGS) is Zone.CLEAR
+
+
+def test_noise_at_a_boundary_does_not_chatter():
+    zone = Zone.CLEAR
+    zones = []
+    for distance in (0.99, 1.01, 0.99, 1.03, 1.01):
+        zone = classify_zone(distance, zone, SETTINGS)
+        zones.append(zone)
+    assert zones == [Zone.SLOW] * 5
+
+
+def test_zero_hysteresis_is_the_plain_rule():
+    settings = check(StopSettings(hysteresis=0.0))
+    assert classify_zone(0.5, Zone.STOP, settings) is Zone.SLOW
+    assert classify_zone(1.0, Zone.STOP, settings) is Zone.CLEAR
+
+
+def test_non_number_distance_is_an_error():
+    with pytest.raises(DecisionError, match='^distance_m:'):
+        classify_zone('0.3', Zone.CLEAR, SETTINGS)
+
+
+# --- decide -------------------------------------------------------------------------------------
+
+def test_decide_follows_the_zone():
+    assert decide(reading(2.0), 0.1, Zone.CLEAR, SETTINGS) == Decision(
+        Zone.CLEAR, 0.5, 'clear ahead (2.00 m)')
+    slow = decide(reading(0.7), 0.1, Zone.CLEAR, SETTINGS)
+    assert (slow.zone, slow.linear_x) == (Zone.SLOW, 0.2)
+    assert 'slow_distance' in slow.reason
+    halt = decide(reading(0.3), 0.1, Zone.SLOW, SETTINGS)
+    assert (halt.zone, halt.linear_x) == (Zone.STOP, 0.0)
+    held = decide(reading(0.52), 0.1, Zone.STOP, SETTINGS)
+    assert (held.zone, held.linear_x) == (Zone.STOP, 0.0)
+    assert '0.55' in held.reason
+
+
+def test_all_clear_reading_cruises():
+    assert decide(reading(math.inf), 0.0, Zone.STOP, SETTINGS).linear_x == 0.5
+
+
+def test_missing_reading_stops():
+    decision = decide(None, None, Zone.CLEAR, SETTINGS)
+    assert (decision.zone, decision.linear_x) == (Zone.STOP, 0.0)
+    assert 'no usable scan' in decision.reason
+
+
+@pytest.mark.parametrize('age', [None, math.nan])
+def test_unknown_age_stops(age):
+    decision = decide(reading(3.0), age, Zone.CLEAR, SETTINGS)
+    assert (decision.zone, decision.linear_x) == (Zone.STOP, 0.0)
+    assert 'age unknown' in decision.reason
+
+
+def test_stale_reading_stops_at_the_timeout():
+    assert decide(reading(3.0), 0.5, Zone.CLEAR, SETTINGS).zone is Zone.CLEAR
+    stale = decide(reading(3.0), 0.51, Zone.CLEAR, SETTINGS)
+    assert (stale.zone, stale.linear_x) == (Zone.STOP, 0.0)
+    assert '0.51 s old' in stale.reason
+
+
+def test_future_stamped_reading_stops_but_small_skew_is_accepted():
+    assert decide(reading(3.0), -0.1, Zone.CLEAR, SETTINGS).zone is Zone.CLEAR
+    future = decide(reading(3.0), -5.0, Zone.CLEAR, SETTINGS)
+    assert future.zone is Zone.STOP
+    assert 'future' in future.reason
+
+
+def test_untrusted_reading_stops():
+    decision = decide(reading(math.nan, valid=0), 0.0, Zone.CLEAR, SETTINGS)
+    assert (decision.zone, decision.linear_x) == (Zone.STOP, 0.0)
+    assert '181 of 181 rays invalid' in decision.reason
+    empty = decide(reading(math.nan, valid=0, total=0), 0.0, Zone.CLEAR, SETTINGS)
+    assert empty.zone is Zone.STOP
+
+
+def test_input_problem_is_none_for_a_good_reading():
+    assert input_problem(reading(0.2), 0.0, 0.5) is None
+
+
+def test_stop_helper():
+    assert stop('why') == Decision(Zone.STOP, 0.0, 'why')
+
+
+# --- settings -----------------------------------------------------------------------------------
+
+def test_stop_distance_must_be_under_slow_distance():
+    with pytest.raises(SettingsError, match='~slow_distance'):
+        check(StopSettings(stop_distance=1.0, slow_distance=1.0))
+
+
+def test_slow_speed_must_not_exceed_cruise_speed():
+    with pytest.raises(SettingsError, match='~cruise_speed'):
+        check(StopSettings(slow_speed=0.6, cruise_speed=0.5))
+
+
+@pytest.mark.parametrize('field, value', [
+    ('stop_distance', 0.0), ('slow_speed', -0.1), ('hysteresis', -0.01), ('rate_hz', 0.0),
+    ('scan_timeout', 0.0), ('front_half_angle', 0.0), ('front_half_angle', 3.5),
+    ('cruise_speed', math.nan)])
+def test_single_field_limits(field, value):
+    with pytest.raises(SettingsError, match='~%s' % field):
+        check(StopSettings(**{field: value}))
+
+
+# --- silence watchdog ---------------------------------------------------------------------------
+
+class FakeClock:
+    def __init__(self):
+        self.now_s = 100.0
+
+    def __call__(self):
+        return self.now_s
+
+
+def test_watchdog_fires_only_after_the_timeout():
+    clock = FakeClock()
+    calls = []
+    watchdog = SilenceWatchdog(0.5, 0.1, calls.append, clock=clock)
+    clock.now_s += 0.5
+    assert watchdog.check() is None
+    clock.now_s += 0.01
+    assert watchdog.check() == pytest.approx(0.51)
+    assert calls == [pytest.approx(0.51)]
+    watchdog.kick()
+    clock.now_s += 0.3
+    assert watchdog.check() is None
+    assert len(calls) == 1
+
+
+def test_watchdog_thread_calls_back_and_stops():
+    fired = threading.Event()
+    watchdog = SilenceWatchdog(0.01, 0.01, lambda silent_s: fired.set())
+    watchdog.start()
+    try:
+        assert watchdog.running
+        assert fired.wait(2.0)
+    finally:
+        watchdog.stop(join_timeout_s=2.0)
+    assert not watchdog.running
+
+
+@pytest.mark.parametrize('timeout, period, field', [
+    (0.0, 0.1, 'timeout_s'), (math.inf, 0.1, 'timeout_s'), (0.5, math.nan, 'period_s')])
+def test_watchdog_rejects_bad_times(timeout, period, field):
+    with pytest.raises(DecisionError, match='^%s:' % field):
+        SilenceWatchdog(timeout, period, lambda silent_s: None)
