@@ -1,0 +1,48 @@
+#!/usr/bin/env python3
+"""Killing the controller outright (SIGKILL: no goodbye zero) while the robot drives: the simulator's
+command watchdog brakes the robot to rest within cmd_vel_timeout plus braking, on ground truth."""
+import os
+import signal
+import sys
+import unittest
+import xmlrpc.client
+
+import rosgraph
+import rosnode
+import rospy
+import rostest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+
+CMD_VEL_TIMEOUT_S = 0.5       # sim_node defaults
+MAX_LINEAR_ACCEL_MPS2 = 2.0
+CONTROL_PERIOD_S = 0.1        # the last command may be up to one period old at the kill
+SLACK_S = 0.15
+AT_REST_MPS = 0.01
+
+
+class KillController(unittest.TestCase):
+    def test_watchdog_stops_the_robot(self):
+        rospy.init_node('kill_controller_test')
+        truth = harness.Latest('base_pose_ground_truth', harness.Odometry, keep_all=True)
+        moving = truth.wait(predicate=lambda m: m.twist.twist.linear.x > 0.4)
+        speed = moving.twist.twist.linear.x
+        api = rosnode.get_api_uri(rosgraph.Master(rospy.get_name()), '/stop_on_obstacle')
+        _, _, pid = xmlrpc.client.ServerProxy(api).getPid('/kill_controller_test')
+        os.kill(pid, signal.SIGKILL)
+        killed = rospy.get_time()
+        harness.sim_sleep(2.0)
+        deadline = killed + CMD_VEL_TIMEOUT_S + speed / MAX_LINEAR_ACCEL_MPS2 + SLACK_S
+        after = [m for m in truth.all if m.header.stamp.to_sec() > deadline]
+        self.assertTrue(after)
+        for m in after:
+            self.assertLess(abs(m.twist.twist.linear.x), AT_REST_MPS,
+                            'moving %.3f s after the kill' % (m.header.stamp.to_sec() - killed))
+        # And not earlier than the watchdog allows: it kept the last command until the timeout.
+        early = [m for m in truth.all if killed < m.header.stamp.to_sec() < killed + CMD_VEL_TIMEOUT_S - CONTROL_PERIOD_S]
+        self.assertTrue(early and max(m.twist.twist.linear.x for m in early) > 0.4)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('closed_loop', 'kill_controller', KillController)
