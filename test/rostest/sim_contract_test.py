@@ -5,8 +5,11 @@ import os
 import sys
 import unittest
 
+import time
+
 import rospy
 import rostest
+from std_srvs.srv import Empty
 from geometry_msgs.msg import Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
@@ -110,6 +113,23 @@ class SimContract(unittest.TestCase):
         before = [m for m in log.all if last_command < m.header.stamp.to_sec() < last_command + CMD_VEL_TIMEOUT_S - 0.1]
         self.assertTrue(before and max(m.twist.twist.linear.x for m in before) > 0.4)
         self.assertEqual(self.contacts.wait().data, 0)
+
+    def test_6_pause_unpause_reset(self):
+        for name in ('sim/pause_physics', 'sim/unpause_physics', 'sim/reset_world'):
+            rospy.wait_for_service(name, timeout=harness.WAIT_FOR_TOPIC_S)
+        rospy.ServiceProxy('sim/pause_physics', Empty)()
+        paused_at = self.clock.wait().clock.to_sec()
+        time.sleep(0.5)  # wall time: simulated time must not move while paused
+        self.assertEqual(self.clock.msg.clock.to_sec(), paused_at)
+        rospy.ServiceProxy('sim/unpause_physics', Empty)()
+        self.clock.wait(predicate=lambda m: m.clock.to_sec() > paused_at + 0.2)
+        self._publish_for(harness.twist(0.5), 0.5)
+        x_moved, _ = self.truth.xy()
+        self.assertGreater(x_moved, 0.05)
+        rospy.ServiceProxy('sim/reset_world', Empty)()
+        harness.sim_sleep(0.2)
+        x, y = self.truth.xy()
+        self.assertLess(abs(x) + abs(y), 0.01, 'reset_world left the robot at (%.3f, %.3f)' % (x, y))
 
 
 if __name__ == '__main__':
