@@ -23,6 +23,9 @@ WHEEL_LATERAL_FRICTION = 1.0
 CASTER_LATERAL_FRICTION = 0.0
 # base_footprint has no inertial in the URDF (KDL rejects one on the root); pybullet would assume 1 kg.
 ROOT_LINK_MASS_KG = 0.001
+# A contact ends only when the robot is this far from the obstacle: pressing against a wall, pybullet's
+# contact list empties for a step now and then, which must not count as a new contact.
+CONTACT_RELEASE_M = 0.005
 ROOT_LINK_INERTIA_KGM2 = 1e-7
 
 
@@ -366,6 +369,9 @@ class Simulation:
             other = contact[2]
             if other in self.obstacle_ids:
                 touching.add(other)
+        for uid in self._touching:
+            if self._call(pybullet.getClosestPoints, self.robot_id, uid, CONTACT_RELEASE_M):
+                touching.add(uid)
         began = touching - self._touching
         self._touching = touching
         self.contact_count += len(began)
