@@ -65,10 +65,12 @@ def run_rostests(args):
     for path in files:
         name = os.path.splitext(os.path.basename(path))[0]
         log = os.path.join(results_dir, name + '.log')
+        # Each file gets a results folder of its own: rosunit names its files after test-name only.
+        file_results = os.path.join(results_dir, name)
         env = dict(os.environ, ROS_HOME=os.path.join(OUT, 'ros_home'), ROS_LOG_DIR=os.path.join(OUT, 'ros_log', name),
                    CLOSED_LOOP_TEST_OUTPUT=os.path.join(OUT, name))
-        cmd = ['rostest', '--results-base-dir', results_dir, '--results-filename', name + '.xml',
-               'closed_loop', os.path.basename(path)]
+        os.makedirs(env['CLOSED_LOOP_TEST_OUTPUT'], exist_ok=True)
+        cmd = ['rostest', '--results-base-dir', file_results, 'closed_loop', os.path.basename(path)]
         started = time.monotonic()
         print('== rostest %s ...' % name, end=' ', flush=True)
         with open(log, 'w') as out:
@@ -77,11 +79,19 @@ def run_rostests(args):
                                        timeout=ROSTEST_HANG_LIMIT_S)
             except subprocess.TimeoutExpired:
                 code = 'timeout'
-        xmls = glob.glob(os.path.join(results_dir, '**', name + '.xml'), recursive=True)
         p = f = s = 0
         names = []
-        if xmls:
-            p, f, s, names = count_junit(xmls[0])
+        # rosunit-<test-name>.xml: one testcase per test method (hztest, our unittest nodes).
+        for xml in sorted(glob.glob(os.path.join(file_results, '**', 'rosunit-*.xml'), recursive=True)):
+            dp, df, ds, dn = count_junit(xml)
+            p, f, s, names = p + dp, f + df, s + ds, names + dn
+        # rostest-<file>.xml: one testcase per <test>; a test node that crashed or hit its time-limit
+        # only shows here.
+        for xml in glob.glob(os.path.join(file_results, '**', 'rostest-*.xml'), recursive=True):
+            _, whole_failed, _, whole_names = count_junit(xml)
+            if whole_failed > f:
+                names += ['%s: %s' % (name, n) for n in whole_names]
+                f = whole_failed
         if code != 0 and f == 0:
             f, names = f + 1, names + ['%s (rostest exit %s, see %s)' % (name, code, log)]
         if p + f == 0:
