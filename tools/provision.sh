@@ -46,10 +46,23 @@ if [ "$(cat "$req_stamp" 2>/dev/null)" != "$want" ]; then
 fi
 export PATH="$venv/bin:$PATH"
 
-# The catkin workspace: .ws/src/closed_loop is this repo.
+# The catkin workspace. .ws/src/closed_loop is a folder of links to this repository's top-level entries
+# (not one link to the repository itself): the workspace lives inside the package, and a link to the
+# whole repository would put .ws/ inside the package path, where rosrun's `find -L` would loop into
+# it and find every executable twice.
 ws="$root/.ws"
+pkg="$ws/src/closed_loop"
 mkdir -p "$ws/src"
-[ -L "$ws/src/closed_loop" ] || ln -sfn "$root" "$ws/src/closed_loop"
+[ -L "$pkg" ] && rm "$pkg"
+mkdir -p "$pkg"
+for entry in "$root"/*; do
+  name=$(basename "$entry")
+  case "$name" in test_output|bags) continue ;; esac
+  [ -e "$pkg/$name" ] || ln -sfn "$entry" "$pkg/$name"
+done
+for link in "$pkg"/*; do
+  [ -L "$link" ] && [ ! -e "$link" ] && rm "$link"
+done
 build_stamp="$ws/.build.sha256"
 want=$( (cat CMakeLists.txt package.xml setup.py; ls scripts launch test/rostest 2>/dev/null; command -v python3) \
         | sha256sum | cut -d' ' -f1)

@@ -13,6 +13,10 @@ from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, d
 # How often a repeated warning or error may reappear in the log (s).
 LOG_PERIOD_S = 2.0
 
+# One output per scan: a burst of scans (rosbag play, a busy machine) must not lose any, and each is
+# cheap to process, so queue a few rather than keep only the newest.
+SCAN_QUEUE_SIZE = 10
+
 
 class ObstacleDetector:
     """Publishes obstacle distances for every scan it receives.
@@ -36,11 +40,11 @@ class ObstacleDetector:
 
     def __init__(self):
         self._settings = load_settings(DetectorSettings)
-        self._nearest_pub = rospy.Publisher('obstacle_distance', Float32, queue_size=1)
+        self._nearest_pub = rospy.Publisher('obstacle_distance', Float32, queue_size=SCAN_QUEUE_SIZE)
         self._sector_pubs = {name: rospy.Publisher('obstacle_distance/' + name, Float32,
-                                                   queue_size=1)
+                                                   queue_size=SCAN_QUEUE_SIZE)
                              for name in SECTOR_CENTRES_RAD}
-        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
+        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=SCAN_QUEUE_SIZE)
 
     def _on_scan(self, msg):
         # The output is the per-scan conversion itself, so it is published from the callback.
