@@ -18,6 +18,7 @@ was expected.
 
 This module is ROS-free: it needs only the standard library and PyYAML.
 """
+import functools
 import math
 import os
 from dataclasses import dataclass
@@ -482,6 +483,8 @@ def disk_overlaps(obstacle, x_m, y_m, radius_m):
     return math.hypot(gap_x, gap_y) < radius_m
 
 
+# The simulator asks for a moving obstacle's place every physics step; its path never changes.
+@functools.lru_cache(maxsize=256)
 def motion_path(obstacle):
     """The closed or back-and-forth path of a moving obstacle as ``(points, cycle_length_m)``.
 

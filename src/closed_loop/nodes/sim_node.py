@@ -53,7 +53,8 @@ class SimNode:
             any field is rejected with a throttled warning and brakes the robot. With no command for
             ``~cmd_vel_timeout`` s the robot brakes to zero.
     Publishes:
-        clock (rosgraph_msgs/Clock): simulated time, every physics step.
+        clock (rosgraph_msgs/Clock): simulated time, after every physics step at real time (at most
+            ``~max_clock_rate_hz`` per wall second when faster), and before every scan and camera frame.
         scan (sensor_msgs/LaserScan): frame base_scan; REP 117 (+inf no return, -inf closer than range_min).
         camera/image_raw (sensor_msgs/Image, rgb8) and camera/camera_info (sensor_msgs/CameraInfo),
             frame camera_optical_frame; off with ``~camera:=false``.
@@ -156,6 +157,8 @@ class SimNode:
         # Render half a period after the scans, so a frame never delays the scan that follows it.
         next_camera = 0.5 * camera_period
         wall_ref, sim_ref = time.monotonic(), sim.time_s
+        clock_min_wall_s = 1.0 / s.max_clock_rate_hz
+        last_clock_wall = time.monotonic()
         self._publish_clock()
         while not self._stopped.is_set() and not rospy.is_shutdown():
             self._take_inputs()
@@ -164,7 +167,13 @@ class SimNode:
                 wall_ref, sim_ref = time.monotonic(), sim.time_s
                 continue
             t = sim.step()
-            self._publish_clock()
+            sensing = t >= next_scan - half_step or (s.camera and t >= next_camera - half_step)
+            now_wall = time.monotonic()
+            if sensing or now_wall - last_clock_wall >= clock_min_wall_s:
+                # Every node on simulated time pays for each /clock message; faster than real time,
+                # publishing every step would cost more than the physics.
+                self._publish_clock()
+                last_clock_wall = now_wall
             for name in sim.new_contacts():
                 rospy.logwarn('sim_node: contact with %r at t = %.3f s', name, t)
                 self.contact_pub.publish(String(name))
