@@ -21,5 +21,8 @@ unit: provision
 bench: provision
 	@$(IN_ENV) python3 tools/bench.py $(BENCH_ARGS)
 
+screenshot: provision
+	@$(IN_ENV) python3 tools/screenshot.py $(SCREENSHOT_ARGS)
+
 clean:
 	rm -rf .ws test_output

@@ -17,15 +17,13 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import world as world_mod  # noqa: E402
+from closed_loop import robot_model, world as world_mod  # noqa: E402
 
 STATUS_PERIOD_S = 1.0
 AT_REST_MPS = 0.01
 # Once the robot has moved and then stayed at rest this long, the demo has shown what it came for.
 REST_TO_FINISH_S = 2.0
 MASTER_WAIT_S = 30.0
-# Half the length of the robot's body along x (urdf/robot.urdf: base_link box 0.30 m), from the LIDAR axis.
-BODY_FRONT_FROM_LIDAR_M = 0.15
 
 
 def clearance_to_obstacles(world, x, y):
@@ -170,7 +168,8 @@ def main():
                      'at rest' if mon.rest_since is not None else 'still moving'))
             if nearest is not None:
                 print('  LIDAR clearance to the nearest obstacle (%s): %.3f m; body front: about %.3f m'
-                      % (nearest, clearance, clearance - BODY_FRONT_FROM_LIDAR_M))
+                      % (nearest, clearance, clearance - robot_model.load_robot_model(
+                          robot_model.default_urdf_path()).scan_to_front_m))
             print('  contacts: %s' % ('none' if mon.contacts == 0 else '%d (the robot touched something)'
                                       % mon.contacts))
             return 0 if mon.contacts == 0 else 1

@@ -23,6 +23,7 @@ class RobotModel:
     urdf_path: str
     wheel_radius_m: float
     wheel_separation_m: float   # distance between the wheel contact points, along y
+    scan_to_front_m: float      # along x, from the LIDAR axis to the front face of base_link's body box
 
 
 def default_urdf_path():
@@ -62,4 +63,24 @@ def load_robot_model(urdf_path):
     separation = abs(ys[0] - ys[1])
     if separation <= 0:
         raise RobotModelError('%s: the wheels are not apart along y' % urdf_path)
-    return RobotModel(urdf_path=urdf_path, wheel_radius_m=radii[0], wheel_separation_m=separation)
+    return RobotModel(urdf_path=urdf_path, wheel_radius_m=radii[0], wheel_separation_m=separation,
+                      scan_to_front_m=_body_front_x(urdf_path, links) - _joint_x(urdf_path, joints, 'scan_joint'))
+
+
+def _joint_x(urdf_path, joints, name):
+    joint = joints.get(name)
+    if joint is None:
+        raise RobotModelError('%s: joint %r is missing' % (urdf_path, name))
+    origin = joint.find('origin')
+    return float(origin.get('xyz', '0 0 0').split()[0]) if origin is not None else 0.0
+
+
+def _body_front_x(urdf_path, links):
+    """x of the front face of base_link's box collision (base_link's x equals base_footprint's)."""
+    for collision in links['base_link'].findall('collision'):
+        box = collision.find('geometry/box')
+        if box is not None:
+            origin = collision.find('origin')
+            x = float(origin.get('xyz', '0 0 0').split()[0]) if origin is not None else 0.0
+            return x + 0.5 * float(box.get('size').split()[0])
+    raise RobotModelError('%s: base_link needs a box collision (the body)' % urdf_path)

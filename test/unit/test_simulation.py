@@ -475,3 +475,12 @@ def test_camera_sees_the_red_box_ahead(make_sim):
 def test_camera_sees_no_red_where_there_is_none(make_sim):
     sim = make_sim(world('wall'), camera_width=160, camera_height=100)
     assert not red_mask(sim.render_camera()).any()
+
+
+def test_robot_model_reads_its_dimensions_from_the_urdf():
+    from closed_loop import robot_model
+    model = robot_model.load_robot_model(robot_model.default_urdf_path())
+    # urdf/robot.urdf: wheels of radius 0.05 m at y = +-0.14 m; body box 0.30 m long, centred on the LIDAR.
+    assert model.wheel_radius_m == pytest.approx(0.05)
+    assert model.wheel_separation_m == pytest.approx(0.28)
+    assert model.scan_to_front_m == pytest.approx(0.15)

@@ -1,0 +1,62 @@
+"""What the visualisation markers show, as plain numbers: the commanded velocity as an arrow, its zone
+colour, and the text for the obstacle distance. The cmd_vel_marker node turns these into Markers."""
+import math
+from dataclasses import dataclass
+
+from closed_loop.settings import param
+
+CLEAR, SLOW, STOP = 'CLEAR', 'SLOW', 'STOP'
+# RGBA in [0, 1]: green, amber, red, as traffic lights.
+ZONE_COLOURS = {CLEAR: (0.1, 0.85, 0.2, 1.0), SLOW: (1.0, 0.75, 0.0, 1.0), STOP: (0.95, 0.1, 0.1, 1.0)}
+
+
+@dataclass
+class MarkerSettings:
+    """cmd_vel_marker's ``~parameters``."""
+    rate_hz: float = param(10.0, 'Hz', 'marker publishing rate', minimum=0.0, exclusive_minimum=True)
+    horizon: float = param(1.0, 's', 'the arrow ends where the command would take the robot in this time '
+                           '(so its length is proportional to linear.x and it bends with angular.z)',
+                           minimum=0.0, exclusive_minimum=True)
+    slow_speed: float = param(0.2, 'm/s', 'with no zone topic, commands up to this speed are coloured SLOW',
+                              minimum=0.0)
+    command_timeout: float = param(0.5, 's', 'no cmd_vel for this long: the arrow is removed',
+                                   minimum=0.0, exclusive_minimum=True)
+    frame_id: str = param('base_footprint', '', 'frame the markers are drawn in')
+    text_height: float = param(0.15, 'm', 'height of the distance text', minimum=0.0, exclusive_minimum=True)
+
+
+def zone_from_command(linear_x, slow_speed):
+    """A zone for a command when no controller reports one: stopped, slow, or cruising."""
+    if linear_x == 0.0:
+        return STOP
+    return SLOW if abs(linear_x) <= slow_speed else CLEAR
+
+
+def normalise_zone(name):
+    """A controller's zone or state name as one of CLEAR / SLOW / STOP (BACKING_UP counts as SLOW,
+    EXPLORING as CLEAR), or None if it is not one we know."""
+    name = (name or '').strip().upper()
+    if name in ZONE_COLOURS:
+        return name
+    return {'EXPLORING': CLEAR, 'BACKING_UP': SLOW}.get(name)
+
+
+def arrow_end(linear_x, angular_z, horizon_s):
+    """(x, y) in m, in the robot's frame, where constant (linear_x m/s, angular_z rad/s) takes the robot
+    after ``horizon_s`` s. Turning in place gives (0, 0): the caller draws the turn some other way."""
+    if abs(angular_z) < 1e-9:
+        return linear_x * horizon_s, 0.0
+    radius = linear_x / angular_z
+    theta = angular_z * horizon_s
+    return radius * math.sin(theta), radius * (1.0 - math.cos(theta))
+
+
+def distance_text(distance_m):
+    """How the obstacle distance reads next to the robot (REP 117 meanings kept: inf clear, NaN unknown)."""
+    if distance_m is None:
+        return 'obstacle: ?'
+    if math.isnan(distance_m):
+        return 'obstacle: no valid reading'
+    if math.isinf(distance_m):
+        return 'obstacle: none in range'
+    return 'obstacle: %.2f m' % distance_m

@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""demo.launch rviz:=true in a real rviz on a virtual screen (Xvfb): once the robot has moved, a screenshot
+shows the scan points (magenta, rviz/closed_loop.rviz), the robot model (its URDF blue) in the 3D view and
+a camera image that is not blank (the red box, outside the 3D view); the launch log has no error.
+Skipped, with the reason, only where Xvfb cannot start."""
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import unittest
+
+import cv2
+import numpy as np
+import rospy
+import rostest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+from closed_loop.screen import ScreenError, VirtualScreen  # noqa: E402
+
+MOVED_M = 0.5
+RENDER_SETTLE_S = 4.0       # wall seconds for rviz to draw a few frames after the robot has moved
+BACKGROUND = (48, 48, 48)   # rviz/closed_loop.rviz's background colour
+MIN_PIXELS = 40
+# Log lines that mean rviz (or anything in the demo) could not show something.
+BAD_LOG = re.compile(r'\[ERROR\]|\[FATAL\]|does not exist|No transform|Could not load|Failed to|'
+                     r'md5sum|type mismatch|Error subscribing', re.IGNORECASE)
+
+
+def view_box(rgb):
+    """Bounding box (x0, y0, x1, y1) of the 3D view: the columns and rows mostly of background colour."""
+    is_bg = np.all(rgb == np.array(BACKGROUND, dtype=np.uint8), axis=2)
+    cols = np.nonzero(is_bg.mean(axis=0) > 0.3)[0]
+    rows = np.nonzero(is_bg.mean(axis=1) > 0.3)[0]
+    if len(cols) == 0 or len(rows) == 0:
+        return None
+    return cols[0], rows[0], cols[-1] + 1, rows[-1] + 1
+
+
+def colour_mask(rgb, test):
+    r, g, b = (rgb[:, :, i].astype(np.int32) for i in range(3))
+    return test(r, g, b)
+
+
+class RvizDisplay(unittest.TestCase):
+    def test_rviz_shows_robot_scan_and_camera(self):
+        rospy.init_node('rviz_display_test')
+        out_dir = harness.output_dir('rviz_display')
+        try:
+            screen = VirtualScreen().__enter__()
+        except ScreenError as error:
+            self.skipTest('no virtual screen: %s' % error)
+        log_path = os.path.join(out_dir, 'demo_rviz.log')
+        launch = None
+        try:
+            env = dict(os.environ, DISPLAY=screen.display)
+            with open(log_path, 'w') as log:
+                launch = subprocess.Popen(['roslaunch', 'closed_loop', 'demo.launch', 'world:=red_box',
+                                           'rviz:=true'], stdout=log, stderr=subprocess.STDOUT, env=env,
+                                          start_new_session=True)
+                truth = harness.GroundTruth()
+                truth.wait(timeout_s=60, predicate=lambda m: m.pose.pose.position.x > MOVED_M)
+                time.sleep(RENDER_SETTLE_S)
+                rgb = screen.screenshot()
+            cv2.imwrite(os.path.join(out_dir, 'rviz_screenshot.png'), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+        finally:
+            if launch is not None:
+                os.killpg(launch.pid, signal.SIGINT)
+                try:
+                    launch.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    os.killpg(launch.pid, signal.SIGKILL)
+            screen.__exit__(None, None, None)
+
+        box = view_box(rgb)
+        self.assertIsNotNone(box, 'no 3D view (background colour) on the screen')
+        x0, y0, x1, y1 = box
+        inside = np.zeros(rgb.shape[:2], bool)
+        inside[y0:y1, x0:x1] = True
+        magenta = colour_mask(rgb, lambda r, g, b: (r > 200) & (b > 200) & (g < 80))
+        blue = colour_mask(rgb, lambda r, g, b: (b > 110) & (b > r + 60) & (b > g + 30))
+        red = colour_mask(rgb, lambda r, g, b: (r > 150) & (g < 70) & (b < 70))
+        self.assertGreater(int((magenta & inside).sum()), MIN_PIXELS, 'no scan points in the 3D view')
+        self.assertGreater(int((blue & inside).sum()), MIN_PIXELS, 'no robot model in the 3D view')
+        self.assertGreater(int((red & ~inside).sum()), MIN_PIXELS, 'the camera panel shows no red box')
+
+        with open(log_path) as log:
+            bad = [line.strip() for line in log if BAD_LOG.search(line)]
+        self.assertEqual(bad, [], 'errors in the demo log (%s)' % log_path)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('closed_loop', 'rviz_display', RvizDisplay)

@@ -1,0 +1,72 @@
+#!/usr/bin/env python3
+"""`make screenshot`: run demo.launch rviz:=true on a virtual screen (Xvfb) with its own master, wait until
+the robot has driven, and save a screenshot of rviz to rviz/screenshot.png (shown in the README).
+
+Usage (inside ``source env.sh``): python3 tools/screenshot.py [--world red_box] [--out rviz/screenshot.png]
+"""
+import argparse
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import cv2
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
+sys.path.insert(0, os.path.join(ROOT, 'src'))
+
+from closed_loop.screen import VirtualScreen  # noqa: E402
+
+MASTER_PORT = 11397
+MOVED_M = 1.6          # far enough for the slow zone and the camera to show the box large
+WAIT_LIMIT_S = 90.0
+RENDER_SETTLE_S = 3.0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--world', default='red_box')
+    parser.add_argument('--out', default=os.path.join(ROOT, 'rviz', 'screenshot.png'))
+    args = parser.parse_args()
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % MASTER_PORT)
+    os.environ.update(env)
+    log_path = os.path.join(ROOT, 'test_output', 'screenshot.log')
+    os.makedirs(os.path.dirname(log_path), exist_ok=True)
+    with VirtualScreen() as screen, open(log_path, 'w') as log:
+        env['DISPLAY'] = screen.display
+        launch = subprocess.Popen(['roslaunch', '-p', str(MASTER_PORT), 'closed_loop', 'demo.launch',
+                                   'world:=' + args.world, 'rviz:=true'], stdout=log, stderr=subprocess.STDOUT,
+                                  env=env, start_new_session=True)
+        try:
+            import rosgraph
+            import rospy
+            from nav_msgs.msg import Odometry
+            deadline = time.monotonic() + WAIT_LIMIT_S
+            while not rosgraph.is_master_online():
+                if time.monotonic() > deadline or launch.poll() is not None:
+                    print('screenshot: no master; see %s' % log_path)
+                    return 1
+                time.sleep(0.2)
+            rospy.init_node('screenshot', anonymous=True, disable_signals=True)
+            while True:
+                msg = rospy.wait_for_message('/base_pose_ground_truth', Odometry, timeout=WAIT_LIMIT_S)
+                p = msg.pose.pose.position
+                if math.hypot(p.x, p.y) > MOVED_M or time.monotonic() > deadline:
+                    break
+            time.sleep(RENDER_SETTLE_S)
+            rgb = screen.screenshot()
+        finally:
+            os.killpg(launch.pid, signal.SIGINT)
+            try:
+                launch.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                os.killpg(launch.pid, signal.SIGKILL)
+    cv2.imwrite(args.out, cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    print('screenshot: %s (%dx%d)' % (os.path.relpath(args.out, ROOT), rgb.shape[1], rgb.shape[0]))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
