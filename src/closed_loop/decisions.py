@@ -28,7 +28,19 @@ class Zone(enum.IntEnum):
 
 
 @dataclasses.dataclass
-class StopSettings:
+class FrontControlSettings:
+    """The ``~parameters`` every front-scan controller shares (stop_on_obstacle, state_machine_controller)."""
+    front_half_angle: float = param(math.pi / 2.0, 'rad', 'half-width of the front sector, centred '
+                                    'on 0 (forward)', minimum=0.0, maximum=math.pi,
+                                    exclusive_minimum=True)
+    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=0.0,
+                           exclusive_minimum=True)
+    scan_timeout: float = param(0.5, 's', 'stop when the newest scan is older than this (or none '
+                                'has arrived)', minimum=0.0, exclusive_minimum=True)
+
+
+@dataclasses.dataclass
+class StopSettings(FrontControlSettings):
     """stop_on_obstacle's ``~parameters``; defaults are the lesson's."""
     stop_distance: float = param(0.5, 'm', 'stop when the nearest obstacle ahead is closer than this',
                                  minimum=0.0, exclusive_minimum=True)
@@ -38,13 +50,6 @@ class StopSettings:
     cruise_speed: float = param(0.5, 'm/s', 'forward speed when the way ahead is clear', minimum=0.0)
     hysteresis: float = param(0.05, 'm', 'leave a zone only once the distance exceeds its limit by '
                               'this much', minimum=0.0)
-    front_half_angle: float = param(math.pi / 2.0, 'rad', 'half-width of the front sector, centred '
-                                    'on 0 (forward)', minimum=0.0, maximum=math.pi,
-                                    exclusive_minimum=True)
-    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=0.0,
-                           exclusive_minimum=True)
-    scan_timeout: float = param(0.5, 's', 'stop when the newest scan is older than this (or none '
-                                'has arrived)', minimum=0.0, exclusive_minimum=True)
 
     def check_together(self):
         if not self.stop_distance < self.slow_distance:

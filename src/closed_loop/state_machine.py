@@ -10,6 +10,7 @@ import math
 import numbers
 from typing import Callable, Optional, Tuple
 
+from closed_loop.decisions import FrontControlSettings
 from closed_loop.settings import SettingsError, param
 
 # Timestamps are float seconds: a difference meant to equal backup_duration (say 2.3 - 0.3) can
@@ -28,7 +29,7 @@ class State(enum.Enum):
 
 
 @dataclasses.dataclass
-class BackUpSettings:
+class BackUpSettings(FrontControlSettings):
     """state_machine_controller's ``~parameters``; defaults are the lesson's."""
     trigger_distance: float = param(0.5, 'm', 'back up when the nearest obstacle ahead is closer than '
                                     'this', minimum=0.0, exclusive_minimum=True)
@@ -36,13 +37,6 @@ class BackUpSettings:
     backup_speed: float = param(-0.3, 'm/s', 'speed while backing up (negative: reverse)')
     backup_duration: float = param(2.0, 's', 'how long to back up', minimum=0.0,
                                    exclusive_minimum=True)
-    front_half_angle: float = param(math.pi / 2.0, 'rad', 'half-width of the front sector, centred '
-                                    'on 0 (forward)', minimum=0.0, maximum=math.pi,
-                                    exclusive_minimum=True)
-    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=0.0,
-                           exclusive_minimum=True)
-    scan_timeout: float = param(0.5, 's', 'stop when the newest scan is older than this (or none '
-                                'has arrived)', minimum=0.0, exclusive_minimum=True)
 
     def check_together(self):
         if not self.backup_speed < 0.0:

@@ -1,23 +1,16 @@
 """state_machine_controller: the lesson's EXPLORING / BACKING_UP behaviour on ROS time."""
-import threading
-
 import rospy
-from geometry_msgs.msg import Twist
-from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from closed_loop.commands import STOP
-from closed_loop.decisions import SilenceWatchdog, input_problem
+from closed_loop.decisions import input_problem
 from closed_loop.nodes.common import load_settings
-from closed_loop.nodes.conversions import scan_from_msg, twist, twist_from_command
-from closed_loop.scan import ScanError, sector_min
+from closed_loop.nodes.conversions import twist, twist_from_command
+from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
 from closed_loop.state_machine import BackUpSettings, BackUpStateMachine, State
 
-# How often a repeated warning or error may reappear in the log (s).
-LOG_PERIOD_S = 2.0
 
-
-class StateMachineController:
+class StateMachineController(FrontController):
     """Explores forward and backs up for a while whenever an obstacle ahead gets too close.
 
     Same structure and staleness rules as stop_on_obstacle: the scan callback stores the front
@@ -47,79 +40,38 @@ class StateMachineController:
     """
 
     def __init__(self):
-        self._settings = load_settings(BackUpSettings)
-        period_s = 1.0 / self._settings.rate_hz
-        self._lock = threading.Lock()
-        self._reading = None
-        self._stamp_s = None
-        self._closing = False
-        self._machine = BackUpStateMachine(self._settings, on_transition=self._on_transition)
-        self._cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
+        FrontController.__init__(self, load_settings(BackUpSettings))
+
+    def setup(self):
+        self._machine = BackUpStateMachine(self.settings, on_transition=self._on_transition)
         self._state_pub = rospy.Publisher('~state', String, queue_size=1, latch=True)
         self._state_pub.publish(String(data=self._machine.state.name))
-        self._watchdog = SilenceWatchdog(self._settings.scan_timeout, period_s, self._on_silence)
-        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
-        # reset=True: a ROS clock that jumps back (sim restart) restarts the timer instead of
-        # killing its thread; the machine restarts its own state timer for the same reason.
-        self._timer = rospy.Timer(rospy.Duration(period_s), self._on_timer, reset=True)
-        self._watchdog.start()
-        rospy.on_shutdown(self._on_shutdown)
 
-    def _on_scan(self, msg):
-        self._watchdog.kick()
-        try:
-            scan = scan_from_msg(msg)
-            reading = sector_min(scan, 0.0, self._settings.front_half_angle)
-            stamp_s = scan.stamp_s
-        except ScanError as error:
-            rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
-            reading, stamp_s = None, None
-        with self._lock:
-            self._reading, self._stamp_s = reading, stamp_s
-            exploring = self._machine.state is State.EXPLORING
-        # React at once to a new obstacle (a stale or bad scan is caught again inside _step).
-        if (exploring and reading is not None and reading.trusted
-                and reading.distance_m < self._settings.trigger_distance):
-            self._step()
+    def react_now(self, reading, age_s):
+        # A new obstacle while exploring; a stale or bad scan is caught again inside decide().
+        return (self._machine.state is State.EXPLORING and reading is not None and reading.trusted
+                and reading.distance_m < self.settings.trigger_distance)
 
-    def _on_timer(self, _event):
-        self._step()
-
-    def _step(self):
-        with self._lock:
-            if self._closing:
-                return
-            now_s = rospy.Time.now().to_sec()
-            age_s = None if self._stamp_s is None else now_s - self._stamp_s
-            problem = input_problem(self._reading, age_s, self._settings.scan_timeout)
-            if problem is not None:
-                self._cmd_pub.publish(twist_from_command(STOP))
-                rospy.logwarn_throttle(LOG_PERIOD_S, 'stopped, %s on hold: %s',
-                                       self._machine.state.name, problem)
-                return
-            _state, linear_x = self._machine.update(self._reading.distance_m, now_s)
-            self._cmd_pub.publish(twist(linear_x, 0.0))
+    def decide(self, reading, age_s):
+        problem = input_problem(reading, age_s, self.settings.scan_timeout)
+        if problem is not None:
+            self.cmd_pub.publish(twist_from_command(STOP))
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'stopped, %s on hold: %s', self._machine.state.name,
+                                   problem)
+            return
+        _state, linear_x = self._machine.update(reading.distance_m, rospy.Time.now().to_sec())
+        self.cmd_pub.publish(twist(linear_x, 0.0))
 
     def _on_transition(self, old, new, now_s):
-        # Called by the machine inside _step, with the lock held.
+        # Called by the machine inside decide(), with the lock held.
         rospy.loginfo('state %s -> %s at %.2f s (front obstacle %.2f m)', old.name, new.name,
-                      now_s, self._reading.distance_m)
+                      now_s, self.reading.distance_m)
         self._state_pub.publish(String(data=new.name))
 
-    def _on_silence(self, silent_s):
-        with self._lock:
-            if self._closing:
-                return
-            self._cmd_pub.publish(twist_from_command(STOP))
+    def on_silence(self, silent_s):
+        self.cmd_pub.publish(twist_from_command(STOP))
         rospy.logwarn_throttle(LOG_PERIOD_S, 'stopped: no scan received for %.2f s of wall time '
-                               '(scan_timeout %.2f s)', silent_s, self._settings.scan_timeout)
-
-    def _on_shutdown(self):
-        self._watchdog.stop()
-        self._timer.shutdown()
-        with self._lock:
-            self._closing = True
-            self._cmd_pub.publish(twist_from_command(STOP))
+                               '(scan_timeout %.2f s)', silent_s, self.settings.scan_timeout)
 
 
 def main():

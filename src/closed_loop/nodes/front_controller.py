@@ -1,0 +1,104 @@
+"""The part stop_on_obstacle and state_machine_controller share: taking in scans, staleness, timers."""
+import threading
+
+import rospy
+from geometry_msgs.msg import Twist
+from sensor_msgs.msg import LaserScan
+
+from closed_loop.commands import STOP
+from closed_loop.decisions import SilenceWatchdog
+from closed_loop.nodes.conversions import scan_from_msg, twist_from_command
+from closed_loop.scan import ScanError, sector_min
+
+# How often a repeated warning or error may reappear in the log (s).
+LOG_PERIOD_S = 2.0
+
+
+class FrontController:
+    """Base of the controllers that drive on the nearest obstacle in the front sector.
+
+    The ``scan`` callback stores the front reading (``closed_loop.scan.SectorReading``) with its header
+    stamp, and calls :meth:`control` at once when :meth:`react_now` says the reading is news that cannot
+    wait; a timer on the ROS clock calls :meth:`control` every ``1 / ~rate_hz`` s. A wall-clock watchdog
+    publishes zero while no scan has been received for ``~scan_timeout`` s of wall time, since a dead
+    simulator stops ``/clock`` and with it the ROS-clock timer. Zero is also sent on shutdown.
+
+    Subclasses set ``self.settings`` (a ``FrontControlSettings``), create their own publishers in
+    :meth:`setup`, and implement :meth:`react_now`, :meth:`decide` (called with the lock held) and
+    :meth:`on_silence`.
+    """
+
+    def __init__(self, settings):
+        self.settings = settings
+        period_s = 1.0 / settings.rate_hz
+        self.lock = threading.Lock()
+        self.reading = None
+        self.stamp_s = None
+        self._closing = False
+        self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
+        self.setup()
+        self._watchdog = SilenceWatchdog(settings.scan_timeout, period_s, self._on_silence)
+        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
+        # reset=True: a ROS clock that jumps back (sim restart) restarts the timer instead of
+        # killing its thread.
+        self._timer = rospy.Timer(rospy.Duration(period_s), lambda _event: self.control(), reset=True)
+        self._watchdog.start()
+        rospy.on_shutdown(self._on_shutdown)
+
+    # -- for subclasses ---------------------------------------------------------------------------------
+    def setup(self):
+        """Create the subclass's own publishers."""
+
+    def react_now(self, reading, age_s):
+        """True if this new reading must be acted on before the next timer tick."""
+        raise NotImplementedError
+
+    def decide(self, reading, age_s):
+        """Decide and publish from the stored reading and its age (s, ROS clock); lock held."""
+        raise NotImplementedError
+
+    def on_silence(self, silent_s):
+        """No scan for ``silent_s`` s of wall time: publish a stop (lock held)."""
+        raise NotImplementedError
+
+    # -- shared ---------------------------------------------------------------------------------------------
+    def age_s(self, stamp_s):
+        """Age of a scan stamp on the ROS clock (s), or None for no scan."""
+        if stamp_s is None:
+            return None
+        return rospy.Time.now().to_sec() - stamp_s
+
+    def _on_scan(self, msg):
+        self._watchdog.kick()
+        try:
+            scan = scan_from_msg(msg)
+            reading = sector_min(scan, 0.0, self.settings.front_half_angle)
+            stamp_s = scan.stamp_s
+        except ScanError as error:
+            rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
+            reading, stamp_s = None, None
+        with self.lock:
+            self.reading, self.stamp_s = reading, stamp_s
+            urgent = self.react_now(reading, self.age_s(stamp_s))
+        if urgent:
+            self.control()
+
+    def control(self):
+        """The one decision path, from the timer and from urgent scans."""
+        with self.lock:
+            if self._closing:
+                return
+            self.decide(self.reading, self.age_s(self.stamp_s))
+
+    def _on_silence(self, silent_s):
+        with self.lock:
+            if self._closing:
+                return
+            self.on_silence(silent_s)
+
+    def _on_shutdown(self):
+        self._watchdog.stop()
+        self._timer.shutdown()
+        with self.lock:
+            self._closing = True
+            self.cmd_pub.publish(twist_from_command(STOP))
