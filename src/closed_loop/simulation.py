@@ -40,9 +40,9 @@ class SimSettings:
     gui: bool = param(False, '', "open pybullet's own window (needs a display)")
     real_time_factor: float = param(1.0, '', 'simulated seconds per wall second; 0 = as fast as possible',
                                     minimum=0.0)
-    physics_rate_hz: float = param(200.0, 'Hz', 'physics steps per simulated second', minimum=10.0,
+    physics_rate_hz: float = param(100.0, 'Hz', 'physics steps per simulated second', minimum=10.0,
                                    maximum=2000.0)
-    max_clock_rate_hz: float = param(250.0, 'Hz', '/clock is published after a physics step at most this '
+    max_clock_rate_hz: float = param(100.0, 'Hz', '/clock is published after a physics step at most this '
                                      'often per wall second (every step at real time; throttled when '
                                      'faster), and always before a scan or camera frame',
                                      minimum=1.0)
@@ -198,11 +198,13 @@ class Simulation:
         self.ground_id = self._call(p.createMultiBody, 0, ground_shape, ground_visual)
         self._call(p.changeDynamics, self.ground_id, -1, lateralFriction=1.0)
         self.obstacle_ids = {}
-        self._obstacles = {}
+        self._movers = {}  # uid -> (obstacle, path corners, cycle length m)
         for obstacle in self.world.obstacles:
             uid = self._add_obstacle(obstacle)
             self.obstacle_ids[uid] = obstacle.name
-            self._obstacles[uid] = obstacle
+            if obstacle.motion is not None:
+                points, cycle_m = world_mod.motion_path(obstacle)
+                self._movers[uid] = (obstacle, points, cycle_m)
         start = self.world.robot_start
         self.robot_id = self._call(p.loadURDF, self.model.urdf_path,
                                    basePosition=[start.x, start.y, SPAWN_CLEARANCE_M],
@@ -273,10 +275,8 @@ class Simulation:
         return self.time_s
 
     def _move_obstacles(self, t_s):
-        for uid, obstacle in self._obstacles.items():
-            if obstacle.motion is None:
-                continue
-            x, y = world_mod.moving_obstacle_xy(obstacle, t_s - self._world_start_s)
+        for uid, (obstacle, points, cycle_m) in self._movers.items():
+            x, y = world_mod.point_on_path(points, cycle_m, obstacle.motion.speed * (t_s - self._world_start_s))
             self._call(pybullet.resetBasePositionAndOrientation, uid, [x, y, obstacle.position[2]],
                        yaw_quaternion(obstacle.yaw))
 

@@ -519,9 +519,14 @@ def moving_obstacle_xy(obstacle, t_s):
     if obstacle.motion is None:
         return obstacle.position[0], obstacle.position[1]
     points, cycle_m = motion_path(obstacle)
+    return point_on_path(points, cycle_m, obstacle.motion.speed * t_s)
+
+
+def point_on_path(points, cycle_m, distance_m):
+    """The (x, y) reached after ``distance_m`` along a :func:`motion_path` cycle, repeating it forever."""
     if not cycle_m > 0.0:
-        return obstacle.position[0], obstacle.position[1]
-    travelled = math.fmod(obstacle.motion.speed * t_s, cycle_m)
+        return points[0]
+    travelled = math.fmod(distance_m, cycle_m)
     for a, b in zip(points, points[1:]):
         segment = math.hypot(b[0] - a[0], b[1] - a[1])
         if travelled <= segment:

@@ -24,6 +24,8 @@ MOVED_M = 0.5
 RENDER_SETTLE_S = 4.0       # wall seconds for rviz to draw a few frames after the robot has moved
 BACKGROUND = (48, 48, 48)   # rviz/closed_loop.rviz's background colour
 MIN_PIXELS = 40
+RVIZ_ATTEMPTS = 2
+RVIZ_DIED = re.compile(r'\[rviz-\d+\] process has died')
 # Log lines that mean rviz (or anything in the demo) could not show something.
 BAD_LOG = re.compile(r'\[ERROR\]|\[FATAL\]|does not exist|No transform|Could not load|Failed to|'
                      r'md5sum|type mismatch|Error subscribing', re.IGNORECASE)
@@ -48,31 +50,17 @@ class RvizDisplay(unittest.TestCase):
     def test_rviz_shows_robot_scan_and_camera(self):
         rospy.init_node('rviz_display_test')
         out_dir = harness.output_dir('rviz_display')
-        try:
-            screen = VirtualScreen().__enter__()
-        except ScreenError as error:
-            self.skipTest('no virtual screen: %s' % error)
-        log_path = os.path.join(out_dir, 'demo_rviz.log')
-        launch = None
-        try:
-            env = dict(os.environ, DISPLAY=screen.display)
-            with open(log_path, 'w') as log:
-                launch = subprocess.Popen(['roslaunch', 'closed_loop', 'demo.launch', 'world:=red_box',
-                                           'rviz:=true'], stdout=log, stderr=subprocess.STDOUT, env=env,
-                                          start_new_session=True)
-                truth = harness.GroundTruth()
-                truth.wait(timeout_s=60, predicate=lambda m: m.pose.pose.position.x > MOVED_M)
-                time.sleep(RENDER_SETTLE_S)
-                rgb = screen.screenshot()
-            cv2.imwrite(os.path.join(out_dir, 'rviz_screenshot.png'), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-        finally:
-            if launch is not None:
-                os.killpg(launch.pid, signal.SIGINT)
-                try:
-                    launch.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    os.killpg(launch.pid, signal.SIGKILL)
-            screen.__exit__(None, None, None)
+        for attempt in range(1, RVIZ_ATTEMPTS + 1):
+            log_path = os.path.join(out_dir, 'demo_rviz_%d.log' % attempt)
+            rgb = self._run_demo_and_screenshot(out_dir, log_path)
+            with open(log_path) as log:
+                text = log.read()
+            if not RVIZ_DIED.search(text):
+                break
+            # Debian's rviz 1.14 now and then corrupts its heap while starting under load (its own
+            # bug: "free(): invalid next size"); say so and try once more rather than fail on it.
+            rospy.logwarn('rviz died during start-up (attempt %d, %s)', attempt, log_path)
+        self.assertFalse(RVIZ_DIED.search(text), 'rviz died in every attempt; see %s' % log_path)
 
         box = view_box(rgb)
         self.assertIsNotNone(box, 'no 3D view (background colour) on the screen')
@@ -86,9 +74,36 @@ class RvizDisplay(unittest.TestCase):
         self.assertGreater(int((blue & inside).sum()), MIN_PIXELS, 'no robot model in the 3D view')
         self.assertGreater(int((red & ~inside).sum()), MIN_PIXELS, 'the camera panel shows no red box')
 
-        with open(log_path) as log:
-            bad = [line.strip() for line in log if BAD_LOG.search(line)]
+        bad = [line.strip() for line in text.splitlines() if BAD_LOG.search(line)]
         self.assertEqual(bad, [], 'errors in the demo log (%s)' % log_path)
+
+    def _run_demo_and_screenshot(self, out_dir, log_path):
+        try:
+            screen = VirtualScreen().__enter__()
+        except ScreenError as error:
+            self.skipTest('no virtual screen: %s' % error)
+        launch = None
+        try:
+            env = dict(os.environ, DISPLAY=screen.display)
+            with open(log_path, 'w') as log:
+                launch = subprocess.Popen(['roslaunch', 'closed_loop', 'demo.launch', 'world:=red_box',
+                                           'rviz:=true'], stdout=log, stderr=subprocess.STDOUT, env=env,
+                                          start_new_session=True)
+                truth = harness.GroundTruth()
+                truth.wait(timeout_s=60, predicate=lambda m: m.pose.pose.position.x > MOVED_M)
+                time.sleep(RENDER_SETTLE_S)
+                rgb = screen.screenshot()
+                truth.sub.unregister()
+            cv2.imwrite(os.path.join(out_dir, 'rviz_screenshot.png'), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+            return rgb
+        finally:
+            if launch is not None:
+                os.killpg(launch.pid, signal.SIGINT)
+                try:
+                    launch.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    os.killpg(launch.pid, signal.SIGKILL)
+            screen.__exit__(None, None, None)
 
 
 if __name__ == '__main__':

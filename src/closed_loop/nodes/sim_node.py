@@ -186,7 +186,9 @@ class SimNode:
                 self._publish_scan(t, sim.scan())
             if s.camera and t >= next_camera - half_step:
                 next_camera += camera_period
-                self._publish_camera(t, sim.render_camera())
+                # Like a lazy camera driver: no subscriber, no rendering.
+                if self.image_pub.get_num_connections() + self.info_pub.get_num_connections() > 0:
+                    self._publish_camera(t, sim.render_camera())
             if s.real_time_factor > 0:
                 target = wall_ref + (t - sim_ref) / s.real_time_factor
                 delay = target - time.monotonic()
@@ -206,6 +208,20 @@ class SimNode:
         sim = self.sim
         stamp = _stamp(t)
         odo = sim.odometry
+        # Messages nobody listens to are not built (faster than real time this is most of the ROS cost).
+        if self.odom_pub.get_num_connections() + self.tf_pub.get_num_connections() > 0:
+            self._publish_odometry(stamp, odo)
+        if self.truth_pub.get_num_connections() > 0:
+            self._publish_truth(stamp)
+        if self.joint_pub.get_num_connections() > 0:
+            joints = JointState()
+            joints.header.stamp = stamp
+            joints.name = [robot_model.LEFT_WHEEL_JOINT, robot_model.RIGHT_WHEEL_JOINT]
+            joints.position = list(sim.wheel_positions())
+            joints.velocity = list(sim.wheel_velocities())
+            self.joint_pub.publish(joints)
+
+    def _publish_odometry(self, stamp, odo):
         odom = Odometry()
         odom.header.stamp = stamp
         odom.header.frame_id = ODOM_FRAME
@@ -227,7 +243,8 @@ class SimNode:
         tf.transform.rotation = odom.pose.pose.orientation
         self.tf_pub.publish(TFMessage([tf]))
 
-        pose, (linear, angular) = sim.ground_truth()
+    def _publish_truth(self, stamp):
+        pose, (linear, angular) = self.sim.ground_truth()
         truth = Odometry()
         truth.header.stamp = stamp
         truth.header.frame_id = WORLD_FRAME
@@ -242,13 +259,6 @@ class SimNode:
         truth.twist.twist.linear.z = linear[2]
         truth.twist.twist.angular.z = angular[2]
         self.truth_pub.publish(truth)
-
-        joints = JointState()
-        joints.header.stamp = stamp
-        joints.name = [robot_model.LEFT_WHEEL_JOINT, robot_model.RIGHT_WHEEL_JOINT]
-        joints.position = list(sim.wheel_positions())
-        joints.velocity = list(sim.wheel_velocities())
-        self.joint_pub.publish(joints)
 
     def _publish_scan(self, t, ranges):
         s = self.settings
