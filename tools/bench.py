@@ -19,7 +19,7 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 BENCH_GLOB = os.path.join(ROOT, 'test', 'bench', 'bench_*.py')
 # A benchmark still running after this long is stopped and counted as failed.
-BENCH_TIME_LIMIT_S = 240
+BENCH_TIME_LIMIT_S = 600
 # After SIGTERM a benchmark gets this long to stop what it started (a ROS master, nodes) before SIGKILL.
 BENCH_STOP_GRACE_S = 45
 
