@@ -58,8 +58,10 @@ class SimSettings:
                                      exclusive_minimum=True)
     wheel_max_torque: float = param(2.0, 'N m', 'torque each wheel motor can apply', minimum=0.0,
                                     exclusive_minimum=True)
-    odom_rate_hz: float = param(50.0, 'Hz', '/odom, /base_pose_ground_truth, /joint_states and TF',
+    odom_rate_hz: float = param(50.0, 'Hz', '/odom, /base_pose_ground_truth and the odom TF',
                                 minimum=0.0, exclusive_minimum=True)
+    joint_states_rate_hz: float = param(20.0, 'Hz', '/joint_states (the wheels, for robot_state_publisher '
+                                        'and rviz)', minimum=0.0, exclusive_minimum=True)
     scan_rate_hz: float = param(10.0, 'Hz', 'LIDAR scans per simulated second', minimum=0.0,
                                 exclusive_minimum=True)
     scan_samples: int = param(360, '', 'rays per scan', minimum=1, maximum=8192)

@@ -50,7 +50,7 @@ class LoopStop(unittest.TestCase):
                 if all(abs(m.twist.twist.linear.x) < AT_REST_MPS for m in recent) and \
                         recent[0].header.stamp.to_sec() <= t_end - REST_FOR_S + 0.05:
                     break
-        rospy.sleep(1.0)  # more stopped-phase commands for the rate check
+        rospy.sleep(2.0)  # more stopped-phase commands for the rate check
         log = list(truth.all)
 
         def clearance(m):
@@ -76,7 +76,12 @@ class LoopStop(unittest.TestCase):
                            'the robot got closer than where it rested (overshoot and back?)')
 
         # /cmd_vel at 10 Hz while moving and while stopped (rates over simulated time).
-        rest_start = next(m.header.stamp.to_sec() for m in log if clearance(m) <= final + 0.001)
+        # Rest begins with the last run of at-rest ground truth.
+        rest_start = log[-1].header.stamp.to_sec()
+        for m in reversed(log):
+            if abs(m.twist.twist.linear.x) >= AT_REST_MPS:
+                break
+            rest_start = m.header.stamp.to_sec()
         moving = [t for t, v in cmds if v > 0 and t < rest_start - 0.5]
         stopped = [t for t, v in cmds if v == 0.0 and t > rest_start + 0.2]
         for name, times in (('moving', moving), ('stopped', stopped)):

@@ -60,7 +60,8 @@ class SimNode:
             frame camera_optical_frame; off with ``~camera:=false``.
         odom (nav_msgs/Odometry): odom -> base_footprint from the wheels; also as TF on tf.
         base_pose_ground_truth (nav_msgs/Odometry): the true pose of base_footprint in frame ``world``.
-        joint_states (sensor_msgs/JointState): the wheel joints, for robot_state_publisher.
+        joint_states (sensor_msgs/JointState): the wheel joints, for robot_state_publisher, at
+            ``~joint_states_rate_hz``.
         contact (std_msgs/String): an obstacle's name each time the robot starts touching it.
         contact_count (std_msgs/UInt32, latched): contacts begun since start or the last reset.
     Services:
@@ -150,6 +151,8 @@ class SimNode:
         sim = self.sim
         scan_period = 1.0 / s.scan_rate_hz
         odom_period = 1.0 / s.odom_rate_hz
+        joints_period = 1.0 / s.joint_states_rate_hz
+        next_joints = 0.0
         camera_period = 1.0 / s.camera_rate_hz
         half_step = 0.5 * sim.dt_s
         next_scan = 0.0
@@ -181,6 +184,9 @@ class SimNode:
             if t >= next_odom - half_step:
                 next_odom += odom_period
                 self._publish_state(t)
+            if t >= next_joints - half_step:
+                next_joints += joints_period
+                self._publish_joints(_stamp(t))
             if t >= next_scan - half_step:
                 next_scan += scan_period
                 self._publish_scan(t, sim.scan())
@@ -207,12 +213,16 @@ class SimNode:
     def _publish_state(self, t):
         sim = self.sim
         stamp = _stamp(t)
+        # (joint states go out on their own period, see _publish_joints)
         odo = sim.odometry
         # Messages nobody listens to are not built (faster than real time this is most of the ROS cost).
         if self.odom_pub.get_num_connections() + self.tf_pub.get_num_connections() > 0:
             self._publish_odometry(stamp, odo)
         if self.truth_pub.get_num_connections() > 0:
             self._publish_truth(stamp)
+
+    def _publish_joints(self, stamp):
+        sim = self.sim
         if self.joint_pub.get_num_connections() > 0:
             joints = JointState()
             joints.header.stamp = stamp
