@@ -55,6 +55,31 @@ def run_unit(args):
     return passed, failed, skipped, names
 
 
+def run_launch_checks(args):
+    """roslaunch-check on every launch file (what roslaunch_add_file_check registers for catkin)."""
+    script = '/usr/share/roslaunch/scripts/roslaunch-check'
+    files = sorted(glob.glob(os.path.join(ROOT, 'launch', '*.launch')))
+    if args.k:
+        files = [f for f in files if args.k in os.path.basename(f)]
+    results_dir = os.path.join(OUT, 'roslaunch-check')
+    os.makedirs(results_dir, exist_ok=True)
+    passed = failed = 0
+    names = []
+    print('== roslaunch-check %s' % ' '.join(os.path.basename(f) for f in files), flush=True)
+    for path in files:
+        name = os.path.splitext(os.path.basename(path))[0]
+        xml = os.path.join(results_dir, name + '.xml')
+        out = subprocess.run([script, '-o', xml, '-t', path], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                             cwd=ROOT)
+        p, f, _, _ = count_junit(xml) if os.path.exists(xml) else (0, 0, 0, [])
+        if out.returncode != 0 or f or not p:
+            failed += 1
+            names.append('roslaunch-check %s: %s' % (name, out.stdout.decode(errors='replace').strip()))
+        else:
+            passed += 1
+    return passed, failed, 0, names
+
+
 def run_rostests(args):
     files = sorted(glob.glob(os.path.join(ROOT, 'test', 'rostest', '*.test')))
     if args.k:
@@ -122,7 +147,7 @@ def main():
     if not args.rostest_only:
         parts.append(run_unit)
     if not args.unit_only:
-        parts.append(run_rostests)
+        parts += [run_launch_checks, run_rostests]
     for part in parts:
         p, f, s, names = part(args)
         passed, failed, skipped = passed + p, failed + f, skipped + s

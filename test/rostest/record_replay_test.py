@@ -105,11 +105,15 @@ class RecordReplay(unittest.TestCase):
         truth.wait(predicate=lambda m: m.twist.twist.linear.x > MOVING_MPS)
 
         out = harness.output_dir('record_replay')
-        prefix = os.path.join(out, 'loop')
+        # A folder that does not exist yet: record.launch must create it.
+        bag_dir = os.path.join(out, 'bags_%d' % os.getpid())
+        self.assertFalse(os.path.exists(bag_dir))
+        prefix = os.path.join(bag_dir, 'loop')
         earlier = set(glob.glob(prefix + '_*'))
         with open(os.path.join(out, 'record_launch.log'), 'w') as log:
             # Its own process group, so SIGINT reaches roslaunch and rosbag record as a Ctrl-C would.
-            self.record = subprocess.Popen(['roslaunch', 'closed_loop', 'record.launch', 'bag_prefix:=' + prefix],
+            self.record = subprocess.Popen(['roslaunch', 'closed_loop', 'record.launch', 'bag_dir:=' + bag_dir,
+                                            'bag_name:=loop'],
                                            stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
 
         def new_files(pattern):
