@@ -27,8 +27,8 @@ MIN_PIXELS = 40
 RVIZ_ATTEMPTS = 2
 RVIZ_DIED = re.compile(r'\[rviz-\d+\] process has died')
 # Log lines that mean rviz (or anything in the demo) could not show something.
-BAD_LOG = re.compile(r'\[ERROR\]|\[FATAL\]|does not exist|No transform|Could not load|Failed to|'
-                     r'md5sum|type mismatch|Error subscribing', re.IGNORECASE)
+BAD_LOG = re.compile(r'\[ERROR\]|\[FATAL\]|ERROR: |cannot launch node|process has died|does not exist|'
+                     r'No transform|Could not load|Failed to|md5sum|type mismatch|Error subscribing')
 
 
 def view_box(rgb):
