@@ -50,6 +50,8 @@ class StopSettings(FrontControlSettings):
     cruise_speed: float = param(0.5, 'm/s', 'forward speed when the way ahead is clear', minimum=0.0)
     hysteresis: float = param(0.05, 'm', 'leave a zone only once the distance exceeds its limit by '
                               'this much', minimum=0.0)
+    react_immediately: bool = param(True, '', 'act on a more dangerous scan at once from the scan '
+                                    "callback; false gives the lesson's timer-only design")
 
     def check_together(self):
         if not self.stop_distance < self.slow_distance:

@@ -6,7 +6,7 @@ It starts its own ROS master on ``--port`` (refusing a port already in use), lau
 watches them from a monitor node on simulated time, and stops everything it started before it
 exits, also on error or SIGTERM. It prints figures and their ratios to the targets and exits 0
 unless a measurement itself failed (a node that never came up, a run that never came to rest).
-It takes about 4.5 minutes (about 450 s of simulated driving); logs go to test_output/bench_loop/.
+It takes about 6 minutes (about 560 s of simulated driving); logs go to test_output/bench_loop/.
 
 The series, in order:
 
@@ -20,6 +20,9 @@ The series, in order:
    ``--runs`` runs at each other cruise speed, for stopping precision.
 4. The same at ``--rtf`` and the cruise speed of series 1, ``--check-runs`` runs: where it differs
    from series 1, the speed-up (or the lighter graph) changed the figures.
+5. The lesson's timer-only design: series 3 again (``--rtf``, cruise TIMER_ONLY_CRUISE_MPS,
+   ``--runs`` runs) with ``~react_immediately`` false, so stop_on_obstacle acts on new danger only
+   in its 10 Hz timer. Its latency is printed beside series 3's and beside the model of it.
 
 What is measured, and how:
 
@@ -43,11 +46,18 @@ What is measured, and how:
   (``--verbose`` prints every run). The measured percentiles therefore sample few phases, and an
   "any phase" row combines the scan-to-zero parts of series 1 with a wait uniform on
   [0, LIDAR period), PHASE_STEPS evenly spaced values: what a robot arriving at random times sees.
-* The lesson's timer-only design decides only in its 10 Hz timer. stop_on_obstacle has no parameter
-  that turns off its immediate reaction to new danger, so that design is not run but modelled: such
-  a node stops at the first timer tick after the dangerous scan arrives, and the phase of its timer
-  to the LIDAR is set by when it starts, uniform over one period. Its row adds a second wait,
-  uniform on [0, timer period), to the "any phase" row.
+* The lesson's timer-only design decides only in its 10 Hz timer: it stops at the first timer tick
+  after the dangerous scan has arrived. Series 5 measures it (stop_on_obstacle with
+  ``~react_immediately`` false); its scan-to-zero part then holds the wait for the tick as well,
+  and its values are printed, since they show which timer phases the runs met. That phase is not
+  the benchmark's to choose: it is set when the node starts and shifts between runs of one launch
+  (rospy's timer schedules each sleep from a fresh clock reading and restarts its schedule after
+  falling two periods behind). The simulator publishes /clock at a scan's physics step before the
+  scan itself, so a tick that falls due in the last clock interval before a scan runs just before
+  the scan arrives and waits a whole period for the next tick (the /clock interval is one physics
+  step or more: the simulator's ~max_clock_rate_hz caps it in wall time). The model row, kept
+  beside the measurement, spreads the timer phase evenly: it adds a second wait, uniform on
+  [0, timer period), to the "any phase" row.
 * Stopping precision: the final LIDAR-to-wall distance from ground truth once the robot has been at
   rest for REST_HOLD_S; /contact must stay silent and /contact_count 0. Between runs the world is
   reset through /sim/reset_world (the controller keeps running).
@@ -81,7 +91,9 @@ WORLD = 'wall'
 RUNS = 20
 CHECK_RUNS = 5
 CRUISE_SPEEDS_MPS = (0.3, 0.5, 1.0)
-# Speed-up of series 2 to 4 (simulated s per wall s); series 4 shows what it changes. At 4 the
+# Series 5 repeats the series of this cruise speed with the controller deciding only in its timer.
+TIMER_ONLY_CRUISE_MPS = 0.5
+# Speed-up of series 2 to 5 (simulated s per wall s); series 4 shows what it changes. At 4 the
 # wall-clock hiccups of a shared 2-core machine, counted 4 times over in simulated time, widened the
 # stopping spread beyond what real time showed; 2 kept it close.
 DEFAULT_FAST_RTF = 2.0
@@ -116,6 +128,7 @@ SERVICE_TIMEOUT_S = 10.0
 STOP_TIMEOUT_S = 15.0
 POLL_S = 0.02
 CRUISE_PARAM = '/stop_on_obstacle/cruise_speed'
+REACT_PARAM = '/stop_on_obstacle/react_immediately'
 # The launch log line sim_node writes when it cannot keep its real-time factor.
 LAG_WARNING = 'cannot keep real_time_factor'
 DEMO_GRAPH = ('sim', 'stop_on_obstacle', 'obstacle_detector', 'vision_node', 'robot_state_publisher',
@@ -130,6 +143,7 @@ LOOP_LAUNCH = """<launch>
   </include>
   <node pkg="closed_loop" type="stop_on_obstacle" name="stop_on_obstacle" output="screen">
     <param name="cruise_speed" value="{cruise}"/>
+    <param name="react_immediately" value="{react_immediately}"/>
   </node>
 </launch>
 """
@@ -525,16 +539,24 @@ class Bench:
         speed_up = (self.monitor.now_s() - sim_start) / (time.monotonic() - wall_start)
         return results, speed_up
 
-    def measure(self, series, launch_argv, groups, measure_memory=None):
+    def measure(self, series, launch_argv, groups, measure_memory=None, expected_params=None):
         """Launch ``launch_argv``, run ``series``, stop the launch; returns a SeriesResult.
 
         ``groups`` is the caller's list of running groups (for its cleanup); ``measure_memory``, if
-        given, is called with the running launch group after the runs.
+        given, is called with the running launch group after the runs; ``expected_params``
+        ({name: value}) are checked on the master once the nodes are up.
         """
+        import rosgraph
         group = Group(['roslaunch', '-p', str(self.port)] + launch_argv,
                       os.path.join(self.log_dir, series.name + '.log'))
         groups.append(group)
         self.wait_ready(group)
+        master = rosgraph.Master('/bench_loop')
+        for name, value in sorted((expected_params or {}).items()):
+            found = master.getParam(name) if master.hasParam(name) else None
+            if found != value or type(found) is not type(value):
+                raise BenchError('parameter %s: expected %r on the master, found %r; see %s'
+                                 % (name, value, found, group.log_path))
         contacts_before = self.monitor.contact_state()[0]
         results, speed = self.run_series(group, series.runs, series.rtf)
         contacts = self.monitor.contact_state()[0] - contacts_before
@@ -546,7 +568,35 @@ class Bench:
         return SeriesResult(results, speed, lag_warnings, contacts, memory)
 
 
-Series = collections.namedtuple('Series', 'name label rtf cruise_mps runs')
+# react_immediately: stop_on_obstacle's ~react_immediately (False: the lesson's timer-only design).
+Series = collections.namedtuple('Series', 'name label rtf cruise_mps runs react_immediately')
+
+
+def build_plan(rtf, runs, check_runs):
+    """The series in the order of the module docstring (series 1 to 5)."""
+    demo_cruise = CRUISE_SPEEDS_MPS[-1]
+    return ([Series('demo_rtf1', 'demo.launch, rtf 1, cruise %g m/s' % demo_cruise, 1.0,
+                    demo_cruise, runs, True)]
+            + [Series('loop_rtf%g_cruise%g' % (rtf, cruise),
+                      'sim + controller, rtf %g, cruise %g m/s' % (rtf, cruise), rtf, cruise, runs,
+                      True) for cruise in CRUISE_SPEEDS_MPS[:-1]]
+            + [Series('check_rtf%g_cruise%g' % (rtf, demo_cruise),
+                      'sim + controller, rtf %g, cruise %g m/s' % (rtf, demo_cruise), rtf,
+                      demo_cruise, check_runs, True),
+               Series('timer_only_rtf%g_cruise%g' % (rtf, TIMER_ONLY_CRUISE_MPS),
+                      'timer-only, rtf %g, cruise %g m/s (measured)' % (rtf, TIMER_ONLY_CRUISE_MPS),
+                      rtf, TIMER_ONLY_CRUISE_MPS, runs, False)])
+
+
+def plan_roles(plan):
+    """{'demo', 'check', 'timer_only', 'immediate': Series}: the series the printout compares;
+    'immediate' is the series that 'timer_only' repeats with the immediate reaction."""
+    timer_only = plan[-1]
+    immediate = [s for s in plan[1:-2] if s.cruise_mps == timer_only.cruise_mps
+                 and s.rtf == timer_only.rtf and s.react_immediately]
+    assert not timer_only.react_immediately and len(immediate) == 1, plan
+    return {'demo': plan[0], 'check': plan[-2], 'timer_only': timer_only,
+            'immediate': immediate[0]}
 SeriesResult = collections.namedtuple('SeriesResult', 'results speed lag_warnings contacts memory')
 
 
@@ -602,7 +652,8 @@ def distance_row(label, distances_m, contacts):
 
 
 def print_latency(line_x, plan, measured):
-    demo = plan[0]
+    roles = plan_roles(plan)
+    demo, immediate, timer_only = roles['demo'], roles['immediate'], roles['timer_only']
     print('\nReaction latency (simulated time): interpolated ground-truth crossing of x = %.3f m to '
           'the first zero /cmd_vel,' % line_x)
     print('  stamped with the monitor\'s /clock at receipt (the simulator\'s receipt within a '
@@ -616,37 +667,64 @@ def print_latency(line_x, plan, measured):
     print('  between the two largest. scan->0: the part after the first scan that reads the wall '
           'inside the line (delivery,')
     print('  decision, delivery: wall-clock work, so it counts rtf times over; resolution one '
-          'clock step); the rest is the')
-    print('  wait for that scan, 0 to %.0f ms by sampling.' % ms(SCAN_PERIOD_S))
+          'clock step; timer-only: also')
+    print('  the wait for the timer tick); the rest is the wait for that scan, 0 to %.0f ms by '
+          'sampling.' % ms(SCAN_PERIOD_S))
     print(LATENCY_HEADER)
     for series in plan:
         results = measured[series.name].results
         print(latency_row(series.label + (' <- the figure' if series is demo else ''),
                           latencies(results), [r.scan_to_zero_s for r in results]))
     parts = [r.scan_to_zero_s for r in measured[demo.name].results if r.scan_to_zero_s is not None]
-    print(latency_row('any phase: scan->0 of series 1 + U[0, %.0f ms)' % ms(SCAN_PERIOD_S),
-                      uniform_waits_model(parts, [SCAN_PERIOD_S]), parts))
-    print(latency_row("lesson's timer-only: the same + U[0, %.0f ms)" % ms(TIMER_PERIOD_S),
-                      uniform_waits_model(parts, [SCAN_PERIOD_S, TIMER_PERIOD_S])))
+    any_phase = uniform_waits_model(parts, [SCAN_PERIOD_S])
+    timer_model = uniform_waits_model(parts, [SCAN_PERIOD_S, TIMER_PERIOD_S])
+    print(latency_row('model, any phase: s.1 scan->0 + U[0, %.0f ms)' % ms(SCAN_PERIOD_S),
+                      any_phase, parts))
+    print(latency_row('model, timer-only: the same + U[0, %.0f ms)' % ms(TIMER_PERIOD_S),
+                      timer_model))
     short = sum(1 for series in plan for r in measured[series.name].results if r.latency_s is None)
     if short:
         print('  %d run(s) came to rest before crossing the line: no latency, final distance '
               'below' % short)
-    print('  stop_on_obstacle has no parameter that turns off its immediate reaction (its scan '
-          'callback decides at once')
-    print('  whenever the zone worsens), so the timer-only design is modelled: its stop waits for '
-          'the next tick of a %g Hz' % STOP.rate_hz)
-    print('  timer whose phase to the LIDAR is set by when the node starts. Measured crossings '
-          'cluster at a few phases of')
-    print('  the LIDAR period (each run is nearly deterministic from the scan that enters the slow '
-          'zone), so the "any')
-    print('  phase" row spreads the wait for the scan evenly; both model rows use %d evenly '
-          'spaced values per wait.' % PHASE_STEPS)
-    print('  Smallest change that would let it run instead: a StopSettings field')
-    print("    react_immediately: bool = param(True, '', 'act on new danger from the scan "
-          "callback, not only in the timer')")
-    print('  and as the first line of StopOnObstacle.react_now:')
-    print('    if not self.settings.react_immediately: return False')
+
+    print("  The lesson's timer-only design (decide only in the %g Hz timer), same setup "
+          '(rtf %g, cruise %g m/s):' % (STOP.rate_hz, timer_only.rtf, timer_only.cruise_mps))
+    print('  %-46s %7s %7s %7s %7s %7s %15s' % ('', 'samples', 'min ms', 'med ms', 'p99 ms',
+                                                 'p99/tgt', 'scan->0 med/max'))
+    for label, series in (('immediate reaction, measured (series %d)'
+                           % (plan.index(immediate) + 1), immediate),
+                          ('timer-only, measured (series %d)' % (plan.index(timer_only) + 1),
+                           timer_only)):
+        results = measured[series.name].results
+        print(latency_row(label, latencies(results), [r.scan_to_zero_s for r in results]))
+    print(latency_row('timer-only, model (any timer phase)', timer_model))
+    fast, slow = (latencies(measured[series.name].results) for series in (immediate, timer_only))
+    if fast and slow:
+        print('  timer-only - immediate, measured: median %+.1f ms, p99 %+.1f ms'
+              % (ms(numpy.median(slow) - numpy.median(fast)),
+                 ms(numpy.percentile(slow, 99) - numpy.percentile(fast, 99))))
+    waits = collections.Counter(int(round(ms(r.scan_to_zero_s)))
+                                for r in measured[timer_only.name].results
+                                if r.scan_to_zero_s is not None)
+    print('  timer-only scan->0, ms (runs): %s'
+          % (', '.join('%d (%d)' % item for item in sorted(waits.items())) or '-'))
+    print('  The timer-only series runs stop_on_obstacle with ~react_immediately false, so its '
+          'scan->0 holds the wait for')
+    print('  the next timer tick (0 to %.0f ms) besides delivery. The phase of the timer to the '
+          'LIDAR is set when the node' % ms(TIMER_PERIOD_S))
+    print('  starts and shifts between runs (rospy schedules each sleep from a fresh clock '
+          'reading); /clock is published at')
+    print('  a scan\'s physics step before the scan, so a tick due in the last clock interval '
+          'before a scan runs just before')
+    print('  it and waits a whole period (the /clock interval is one physics step or more, see '
+          'the simulator). The model')
+    print('  spreads the timer phase evenly: it adds a wait uniform on [0, %.0f ms) to the "any '
+          'phase" row. Measured crossings' % ms(TIMER_PERIOD_S))
+    print('  cluster at a few phases of the LIDAR period too (each run is nearly deterministic '
+          'from the scan that enters the')
+    print('  slow zone), so the "any phase" row spreads the wait for the scan evenly; both model '
+          'rows use %d evenly spaced' % PHASE_STEPS)
+    print('  values per wait.')
 
 
 def print_precision(plan, measured, monitor_contacts):
@@ -660,15 +738,18 @@ def print_precision(plan, measured, monitor_contacts):
         print(distance_row(series.label, [r.final_distance_m for r in m.results], m.contacts))
     print('  The robot crosses the stop line at slow_speed %.1f m/s, so the wait for the scan alone '
           'can spread the stops by' % STOP.slow_speed)
-    print('  %.1f cm (one LIDAR period); the measured spreads cover only the phases the runs '
-          'sampled (see the latency).' % (1e2 * STOP.slow_speed * SCAN_PERIOD_S))
+    print('  %.1f cm (one LIDAR period; timer-only, the wait for the tick as well: %.1f cm over '
+          'all timer phases); the' % (1e2 * STOP.slow_speed * SCAN_PERIOD_S,
+                                     1e2 * STOP.slow_speed * (SCAN_PERIOD_S + TIMER_PERIOD_S)))
+    print('  measured spreads cover only the phases the runs sampled (see the latency).')
     contacts, max_count = monitor_contacts
     print('  over all runs: %d /contact message(s), largest /contact_count %d%s'
           % (contacts, max_count, '' if contacts == 0 and max_count == 0 else '  <-- CONTACT'))
-    demo, check = measured[plan[0].name], measured[plan[-1].name]
-    print('  rtf check at cruise %g m/s (series 4 - series 1): median final distance %+.1f mm, '
+    roles = plan_roles(plan)
+    demo, check = measured[roles['demo'].name], measured[roles['check'].name]
+    print('  rtf check at cruise %g m/s (series %d - series 1): median final distance %+.1f mm, '
           'median scan->0 %+.1f ms'
-          % (plan[0].cruise_mps,
+          % (roles['demo'].cruise_mps, plan.index(roles['check']) + 1,
              1e3 * (numpy.median([r.final_distance_m for r in check.results])
                     - numpy.median([r.final_distance_m for r in demo.results])),
              ms(numpy.median([r.scan_to_zero_s for r in check.results
@@ -711,9 +792,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--port', type=int, default=DEFAULT_PORT, help='port of the private master')
     parser.add_argument('--rtf', type=float, default=DEFAULT_FAST_RTF,
-                        help='real_time_factor of series 2 to 4')
-    parser.add_argument('--runs', type=int, default=RUNS, help='runs of series 1 and per cruise '
-                        'speed of series 2')
+                        help='real_time_factor of series 2 to 5')
+    parser.add_argument('--runs', type=int, default=RUNS, help='runs of series 1, per cruise '
+                        'speed of series 2 and 3, and of series 5')
     parser.add_argument('--check-runs', type=int, default=CHECK_RUNS, help='runs of series 4')
     parser.add_argument('--verbose', action='store_true', help='print every run')
     args = parser.parse_args()
@@ -736,15 +817,7 @@ def main():
     wall_x = wall_face_x(world)
     log_dir = os.path.join(ROOT, 'test_output', 'bench_loop')
     bench = Bench(args.port, log_dir, wall_x, args.verbose)
-    demo_cruise = CRUISE_SPEEDS_MPS[-1]
-    plan = ([Series('demo_rtf1', 'demo.launch, rtf 1, cruise %g m/s' % demo_cruise, 1.0,
-                    demo_cruise, args.runs)]
-            + [Series('loop_rtf%g_cruise%g' % (args.rtf, cruise),
-                      'sim + controller, rtf %g, cruise %g m/s' % (args.rtf, cruise), args.rtf,
-                      cruise, args.runs) for cruise in CRUISE_SPEEDS_MPS[:-1]]
-            + [Series('check_rtf%g_cruise%g' % (args.rtf, demo_cruise),
-                      'sim + controller, rtf %g, cruise %g m/s' % (args.rtf, demo_cruise),
-                      args.rtf, demo_cruise, args.check_runs)])
+    plan = build_plan(args.rtf, args.runs, args.check_runs)
 
     print('closed-loop benchmark, world %r: wall face x = %.3f m, stop_distance %.2f m '
           '(line x = %.3f m);' % (world.name, wall_x, STOP.stop_distance, bench.line_x))
@@ -779,9 +852,13 @@ def main():
                 else:
                     path = os.path.join(tmp, series.name + '.launch')
                     with open(path, 'w') as f:
-                        f.write(LOOP_LAUNCH.format(world=WORLD, rtf=series.rtf,
-                                                   cruise=series.cruise_mps))
-                    measured[series.name] = bench.measure(series, [path], groups)
+                        f.write(LOOP_LAUNCH.format(
+                            world=WORLD, rtf=series.rtf, cruise=series.cruise_mps,
+                            react_immediately=str(series.react_immediately).lower()))
+                    # Read back, so that a launch that lost the setting cannot pass for it.
+                    measured[series.name] = bench.measure(
+                        series, [path], groups,
+                        expected_params={REACT_PARAM: series.react_immediately})
         monitor_contacts = bench.monitor.contact_state()
     except BenchError as error:
         print('bench_loop: measurement failed: %s' % error)

@@ -7,7 +7,7 @@ import pytest
 from closed_loop.decisions import (Decision, DecisionError, SilenceWatchdog, StopSettings, Zone,
                                    classify_zone, decide, input_problem, speed_for_zone, stop)
 from closed_loop.scan import SectorReading
-from closed_loop.settings import SettingsError, check
+from closed_loop.settings import SettingsError, check, from_params
 
 SETTINGS = check(StopSettings())
 
@@ -156,6 +156,25 @@ def test_stop_distance_must_be_under_slow_distance():
 def test_slow_speed_must_not_exceed_cruise_speed():
     with pytest.raises(SettingsError, match='~cruise_speed'):
         check(StopSettings(slow_speed=0.6, cruise_speed=0.5))
+
+
+def load_stop_settings(params):
+    """StopSettings read from ``params`` ({'~name': value}) the way the nodes read the server."""
+    return from_params(StopSettings, lambda name, default: params.get(name, default))
+
+
+def test_react_immediately_defaults_to_true_and_parses_from_params():
+    assert SETTINGS.react_immediately is True
+    assert load_stop_settings({}).react_immediately is True
+    # A launch file's <param value="false"/> arrives as a bool, a string in YAML quotes as a string.
+    assert load_stop_settings({'~react_immediately': False}).react_immediately is False
+    assert load_stop_settings({'~react_immediately': 'false'}).react_immediately is False
+    assert load_stop_settings({'~react_immediately': 'True'}).react_immediately is True
+
+
+def test_react_immediately_rejects_a_non_bool():
+    with pytest.raises(SettingsError, match='~react_immediately'):
+        load_stop_settings({'~react_immediately': 0})
 
 
 @pytest.mark.parametrize('field, value', [

@@ -13,16 +13,19 @@ class StopOnObstacle(FrontController):
 
     The scan callback stores the front reading with its header stamp; a timer on the ROS clock
     decides and publishes. A reading that would make things more dangerous is acted on at once from
-    the callback, through the same decide-and-publish path. A missing, stale (older than
-    ``~scan_timeout`` by the ROS clock), malformed or all-invalid scan means stop. A wall-clock
-    watchdog also publishes zero while no scan has been received for ``~scan_timeout`` s of wall
-    time, since a dead simulator stops ``/clock`` and with it the ROS-clock timer.
+    the callback, through the same decide-and-publish path, unless ``~react_immediately`` is false:
+    then only the timer acts on new danger (the lesson's design), which adds a wait of up to one
+    timer period to the reaction. A missing, stale (older than ``~scan_timeout`` by the ROS clock),
+    malformed or all-invalid scan means stop. A wall-clock watchdog also publishes zero while no
+    scan has been received for ``~scan_timeout`` s of wall time, since a dead simulator stops
+    ``/clock`` and with it the ROS-clock timer.
 
     Subscriptions:
         ``scan`` (sensor_msgs/LaserScan).
     Publications:
         ``cmd_vel`` (geometry_msgs/Twist): forward speed only, every ``1 / ~rate_hz`` s of ROS
-        time, at once on new danger, zero from the watchdog and on shutdown.
+        time, at once on new danger (with ``~react_immediately``), zero from the watchdog and on
+        shutdown.
         ``~zone`` (std_msgs/String, latched): CLEAR, SLOW or STOP, on every change.
     Parameters:
         ``~stop_distance`` (m, default 0.5): stop when the nearest obstacle ahead is closer.
@@ -30,6 +33,9 @@ class StopOnObstacle(FrontController):
         ``~slow_speed`` (m/s, default 0.2): speed in the slow zone.
         ``~cruise_speed`` (m/s, default 0.5): speed when clear.
         ``~hysteresis`` (m, default 0.05): margin past a limit needed to leave its zone.
+        ``~react_immediately`` (bool, default true): act on a more dangerous scan at once from the
+        scan callback; false decides only in the timer, as the lesson does (the very first
+        decision after start-up still happens at once, see :meth:`react_now`).
         ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around 0.
         ``~rate_hz`` (Hz, default 10): control timer rate; also the watchdog's rate.
         ``~scan_timeout`` (s, default 0.5): a scan older than this (ROS clock), or no scan received
@@ -44,8 +50,21 @@ class StopOnObstacle(FrontController):
         self._zone_pub = rospy.Publisher('~zone', String, queue_size=1, latch=True)
 
     def react_now(self, reading, age_s):
+        """True for the first scan after start-up and, with ``~react_immediately``, for new danger.
+
+        The first decision (no zone published yet) is made at once whatever ``~react_immediately``
+        says: it is not a reaction to a change but the end of start-up, before which this node has
+        sent no command at all; deciding at once only makes the first command (a stop, if the scan
+        says so) come up to one timer period sooner, from a fresh scan. It happens once per node
+        start (the watchdog's stop also counts as a decision), so reaction latencies measured
+        after the node's first command are those of the timer-only design.
+        """
         previous = self._zone
-        return previous is None or decide(reading, age_s, previous, self.settings).zone > previous
+        if previous is None:
+            return True
+        if not self.settings.react_immediately:
+            return False
+        return decide(reading, age_s, previous, self.settings).zone > previous
 
     def decide(self, reading, age_s):
         self._publish(decide(reading, age_s, self._zone, self.settings))
