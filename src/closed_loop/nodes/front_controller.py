@@ -23,6 +23,12 @@ class FrontController:
     publishes zero while no scan has been received for ``~scan_timeout`` s of wall time, since a dead
     simulator stops ``/clock`` and with it the ROS-clock timer. Zero is also sent on shutdown.
 
+    Parameters every front controller has (``closed_loop.decisions.FrontControlSettings``):
+        ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around 0.
+        ``~rate_hz`` (Hz, default 10): control timer rate; also the watchdog's rate.
+        ``~scan_timeout`` (s, default 0.5): a scan older than this (ROS clock), or no scan received
+        for this long (wall clock), means stop.
+
     Subclasses set ``self.settings`` (a ``FrontControlSettings``), create their own publishers in
     :meth:`setup`, and implement :meth:`react_now`, :meth:`decide` (called with the lock held) and
     :meth:`on_silence`.

@@ -33,10 +33,8 @@ class StateMachineController(FrontController):
         ``~explore_speed`` (m/s, default 0.5): forward speed while exploring.
         ``~backup_speed`` (m/s, default -0.3, must be negative): speed while backing up.
         ``~backup_duration`` (s, default 2.0): how long to back up (ROS time).
-        ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around 0.
-        ``~rate_hz`` (Hz, default 10): control timer rate; also the watchdog's rate.
-        ``~scan_timeout`` (s, default 0.5): a scan older than this (ROS clock), or no scan received
-        for this long (wall clock), means stop.
+        ``~front_half_angle``, ``~rate_hz``, ``~scan_timeout``: shared by the front controllers, see
+        :class:`closed_loop.nodes.front_controller.FrontController`.
     """
 
     def __init__(self):

@@ -36,10 +36,8 @@ class StopOnObstacle(FrontController):
         ``~react_immediately`` (bool, default true): act on a more dangerous scan at once from the
         scan callback; false decides only in the timer, as the lesson does (the very first
         decision after start-up still happens at once, see :meth:`react_now`).
-        ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around 0.
-        ``~rate_hz`` (Hz, default 10): control timer rate; also the watchdog's rate.
-        ``~scan_timeout`` (s, default 0.5): a scan older than this (ROS clock), or no scan received
-        for this long (wall clock), means stop.
+        ``~front_half_angle``, ``~rate_hz``, ``~scan_timeout``: shared by the front controllers, see
+        :class:`closed_loop.nodes.front_controller.FrontController`.
     """
 
     def __init__(self):
