@@ -173,7 +173,8 @@ class SilenceWatchdog:
 
     It runs on a monotonic wall clock in a daemon thread, so it keeps working when simulated time
     stops (a dead simulator also stops ``/clock``, and timers on the ROS clock then never fire).
-    :meth:`kick` records an arrival; the time before the first kick counts from construction.
+    :meth:`kick` records an arrival; the time before the first kick counts from construction. A stall
+    of this process (the thread wakes more than a period late) is not silence: it is left out.
     ``clock`` (s) is injectable for tests.
     """
 
@@ -226,6 +227,19 @@ class SilenceWatchdog:
         """True while the checking thread is alive."""
         return self._thread is not None and self._thread.is_alive()
 
+    def discount(self, stalled_s):
+        """Do not count ``stalled_s`` seconds, in which this process itself was not running, as silence."""
+        with self._lock:
+            self._last_arrival_s += max(0.0, stalled_s)
+
     def _run(self):
+        woke = self._clock()
         while not self._stopped.wait(self._period_s):
+            now = self._clock()
+            slept, woke = now - woke, now
+            # Woken a whole period late: the process (or the machine) was stalled, and the input that
+            # came meanwhile still waits in the socket for its callbacks. Judging now would stop the
+            # robot for silence that was ours; the stall is left out and the next period judges.
+            if slept > 2.0 * self._period_s:
+                self.discount(slept - self._period_s)
             self.check()

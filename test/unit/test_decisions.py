@@ -1,6 +1,7 @@
 """Stop / slow / cruise: lesson boundaries, hysteresis, and stop on bad input."""
 import math
 import threading
+import time
 
 import pytest
 
@@ -221,6 +222,32 @@ def test_watchdog_thread_calls_back_and_stops():
     finally:
         watchdog.stop(join_timeout_s=2.0)
     assert not watchdog.running
+
+
+def test_watchdog_discount_leaves_time_out():
+    clock = FakeClock()
+    calls = []
+    watchdog = SilenceWatchdog(0.5, 0.1, calls.append, clock=clock)
+    clock.now_s += 0.8
+    watchdog.discount(0.6)
+    assert watchdog.check() is None
+    clock.now_s += 0.31
+    assert watchdog.check() == pytest.approx(0.51)
+
+
+def test_watchdog_thread_does_not_count_its_own_stall_as_silence():
+    # The clock jumps 1 s between two wakes of the thread: the process was stalled, not the input.
+    jump = {'s': 0.0}
+    fired = threading.Event()
+    watchdog = SilenceWatchdog(0.5, 0.02, lambda silent_s: fired.set(),
+                               clock=lambda: time.monotonic() + jump['s'])
+    watchdog.start()
+    try:
+        jump['s'] = 1.0
+        assert not fired.wait(0.2), 'a stall of the checking thread was taken for silence'
+        assert fired.wait(5.0), 'real silence after the stall went unnoticed'
+    finally:
+        watchdog.stop(join_timeout_s=2.0)
 
 
 @pytest.mark.parametrize('timeout, period, field', [
