@@ -4,7 +4,7 @@
 SHELL := /bin/bash
 IN_ENV := source ./env.sh &&
 
-.PHONY: provision demo test unit rostest bench screenshot clean
+.PHONY: provision demo test unit rostest bench screenshot compat clean
 
 provision:
 	@bash tools/provision.sh
@@ -24,5 +24,9 @@ bench: provision
 screenshot: provision
 	@$(IN_ENV) python3 tools/screenshot.py $(SCREENSHOT_ARGS)
 
+# The ROS-free unit tests under Python 3.8 (ROS Noetic's), where a python3.8 exists (PATH or pyenv).
+compat:
+	@bash tools/compat.sh
+
 clean:
-	rm -rf .ws test_output
+	rm -rf .ws .venv38 test_output
