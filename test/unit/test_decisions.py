@@ -47,16 +47,12 @@ def test_entering_a_more_dangerous_zone_is_immediate():
     assert classify_zone(0.499, Zone.CLEAR, SETTINGS) is Zone.STOP
 
 
-def test_leaving_stop_needs_the_hysteresis_margin():
-    assert classify_zone(0.5, Zone.STOP, SETTINGS) is Zone.STOP
-    assert classify_zone(0.549, Zone.STOP, SETTINGS) is Zone.STOP
-    assert classify_zone(0.55, Zone.STOP, SETTINGS) is Zone.SLOW
-
-
-def test_leaving_slow_needs_the_hysteresis_margin():
-    assert classify_zone(1.0, Zone.SLOW, SETTINGS) is Zone.SLOW
-    assert classify_zone(1.049, Zone.SLOW, SETTINGS) is Zone.SLOW
-    assert classify_zone(1.05, Zone.SLOW, SETTINGS) is Zone.CLEAR
+@pytest.mark.parametrize('zone, limit_m, next_zone', [(Zone.STOP, 0.5, Zone.SLOW), (Zone.SLOW, 1.0, Zone.CLEAR)])
+def test_leaving_a_zone_needs_the_hysteresis_margin(zone, limit_m, next_zone):
+    # hysteresis 0.05 m: at the limit and just short of limit + margin the robot stays in the zone
+    assert classify_zone(limit_m, zone, SETTINGS) is zone
+    assert classify_zone(limit_m + 0.049, zone, SETTINGS) is zone
+    assert classify_zone(limit_m + 0.05, zone, SETTINGS) is next_zone
 
 
 def test_leaving_stop_steps_through_slow():
