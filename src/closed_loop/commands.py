@@ -8,7 +8,7 @@ import dataclasses
 import math
 import numbers
 
-from closed_loop.settings import param
+from closed_loop.settings import MIN_RATE_HZ, param
 
 
 class CommandError(ValueError):
@@ -54,8 +54,7 @@ PATTERNS = {
 @dataclasses.dataclass
 class PublisherSettings:
     """velocity_publisher's ``~parameters``; defaults are the lesson's."""
-    rate_hz: float = param(10.0, 'Hz', 'publishing rate (ROS clock)', minimum=0.0,
-                           exclusive_minimum=True)
+    rate_hz: float = param(10.0, 'Hz', 'publishing rate (ROS clock)', minimum=MIN_RATE_HZ)
     linear_x: float = param(0.5, 'm/s', 'forward speed, used when pattern is empty')
     angular_z: float = param(0.0, 'rad/s', 'yaw rate (positive: left), used when pattern is empty')
     pattern: str = param('', '', "a named pattern (%s) or '' for linear_x / angular_z"

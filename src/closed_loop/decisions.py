@@ -13,7 +13,8 @@ import threading
 import time
 from typing import Callable, Optional
 
-from closed_loop.settings import SettingsError, param
+from closed_loop import robot_model
+from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
 
 
 class DecisionError(ValueError):
@@ -27,16 +28,27 @@ class Zone(enum.IntEnum):
     STOP = 2
 
 
+#: Scans older than this are never acted on, whatever ``~scan_timeout`` says.
+MAX_SCAN_TIMEOUT_S = 5.0
+
+
 @dataclasses.dataclass
 class FrontControlSettings:
     """The ``~parameters`` every front-scan controller shares (stop_on_obstacle, state_machine_controller)."""
     front_half_angle: float = param(math.pi / 2.0, 'rad', 'half-width of the front sector, centred '
                                     'on 0 (forward)', minimum=0.0, maximum=math.pi,
                                     exclusive_minimum=True)
-    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=0.0,
-                           exclusive_minimum=True)
+    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=MIN_RATE_HZ)
     scan_timeout: float = param(0.5, 's', 'stop when the newest scan is older than this (or none '
-                                'has arrived)', minimum=0.0, exclusive_minimum=True)
+                                'has arrived)', minimum=0.0, maximum=MAX_SCAN_TIMEOUT_S,
+                                exclusive_minimum=True)
+    scan_frame: str = param(robot_model.SCAN_FRAME, '', "the laser's frame_id: scans in any other "
+                            'frame are refused (stop)')
+
+    @property
+    def watchdog_period_s(self):
+        """How often the silence watchdog looks: a control period, or half the timeout if that is shorter."""
+        return min(1.0 / self.rate_hz, 0.5 * self.scan_timeout)
 
 
 @dataclasses.dataclass

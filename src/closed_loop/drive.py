@@ -40,6 +40,18 @@ def clamp(value, limit):
     return max(-limit, min(limit, value))
 
 
+def clipped_fields(twist, max_linear_mps, max_angular_rps):
+    """What :func:`limit_twist` would clip, one sentence per field with the value and the limit."""
+    found = []
+    if abs(twist.linear_x) > max_linear_mps:
+        found.append('linear.x %g m/s clipped to the limit %g m/s (~max_linear_speed)'
+                     % (twist.linear_x, math.copysign(max_linear_mps, twist.linear_x)))
+    if abs(twist.angular_z) > max_angular_rps:
+        found.append('angular.z %g rad/s clipped to the limit %g rad/s (~max_angular_speed)'
+                     % (twist.angular_z, math.copysign(max_angular_rps, twist.angular_z)))
+    return found
+
+
 def limit_twist(target, max_linear_mps, max_angular_rps):
     """Clip a commanded twist to the robot's speed limits."""
     return BodyTwist(clamp(target.linear_x, max_linear_mps), clamp(target.angular_z, max_angular_rps))

@@ -3,7 +3,7 @@ colour, and the text for the obstacle distance. The cmd_vel_marker node turns th
 import math
 from dataclasses import dataclass
 
-from closed_loop.settings import param
+from closed_loop.settings import MIN_RATE_HZ, param
 
 CLEAR, SLOW, STOP = 'CLEAR', 'SLOW', 'STOP'
 # RGBA in [0, 1]: green, amber, red, as traffic lights.
@@ -13,7 +13,7 @@ ZONE_COLOURS = {CLEAR: (0.1, 0.85, 0.2, 1.0), SLOW: (1.0, 0.75, 0.0, 1.0), STOP:
 @dataclass
 class MarkerSettings:
     """cmd_vel_marker's ``~parameters``."""
-    rate_hz: float = param(10.0, 'Hz', 'marker publishing rate', minimum=0.0, exclusive_minimum=True)
+    rate_hz: float = param(10.0, 'Hz', 'marker publishing rate', minimum=MIN_RATE_HZ)
     horizon: float = param(1.0, 's', 'the arrow ends where the command would take the robot in this time '
                            '(so its length is proportional to linear.x and it bends with angular.z)',
                            minimum=0.0, exclusive_minimum=True)

@@ -10,6 +10,11 @@ import math
 import typing
 
 
+#: The least rate (Hz) of any node's timer or sensor: slower would leave its timers, and the watchdogs
+#: that ride on them, asleep for seconds.
+MIN_RATE_HZ = 1.0
+
+
 class SettingsError(ValueError):
     """A parameter value is unusable; the message names the parameter and what was expected."""
 

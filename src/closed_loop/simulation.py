@@ -13,7 +13,7 @@ import numpy as np
 import pybullet
 
 from closed_loop import drive, robot_model, world as world_mod
-from closed_loop.settings import param
+from closed_loop.settings import MIN_RATE_HZ, param
 
 GRAVITY_MPS2 = 9.81
 # Spawn the robot this far above the ground so no wheel starts inside it.
@@ -47,7 +47,7 @@ class SimSettings:
                                      'faster), and always before a scan or camera frame',
                                      minimum=1.0)
     cmd_vel_timeout: float = param(0.5, 's', 'brake to zero when no command arrived for this long',
-                                   minimum=0.0, exclusive_minimum=True)
+                                   minimum=0.0, maximum=5.0, exclusive_minimum=True)
     max_linear_speed: float = param(1.5, 'm/s', 'linear.x is clipped to +-this', minimum=0.0,
                                     exclusive_minimum=True)
     max_angular_speed: float = param(3.0, 'rad/s', 'angular.z is clipped to +-this', minimum=0.0,
@@ -59,11 +59,10 @@ class SimSettings:
     wheel_max_torque: float = param(2.0, 'N m', 'torque each wheel motor can apply', minimum=0.0,
                                     exclusive_minimum=True)
     odom_rate_hz: float = param(50.0, 'Hz', '/odom, /base_pose_ground_truth and the odom TF',
-                                minimum=0.0, exclusive_minimum=True)
+                                minimum=MIN_RATE_HZ)
     joint_states_rate_hz: float = param(20.0, 'Hz', '/joint_states (the wheels, for robot_state_publisher '
-                                        'and rviz)', minimum=0.0, exclusive_minimum=True)
-    scan_rate_hz: float = param(10.0, 'Hz', 'LIDAR scans per simulated second', minimum=0.0,
-                                exclusive_minimum=True)
+                                        'and rviz)', minimum=MIN_RATE_HZ)
+    scan_rate_hz: float = param(10.0, 'Hz', 'LIDAR scans per simulated second', minimum=MIN_RATE_HZ)
     scan_samples: int = param(360, '', 'rays per scan', minimum=1, maximum=8192)
     scan_angle_min: float = param(-math.pi, 'rad', 'angle of the first ray (0 = straight ahead)',
                                   minimum=-2 * math.pi, maximum=2 * math.pi)
@@ -75,8 +74,7 @@ class SimSettings:
     scan_noise_stddev: float = param(0.0, 'm', 'Gaussian noise added to each finite range', minimum=0.0)
     noise_seed: int = param(0, '', 'seed of the noise generator (same seed, same noise)', minimum=0)
     camera: bool = param(True, '', 'render and publish the camera')
-    camera_rate_hz: float = param(10.0, 'Hz', 'camera frames per simulated second', minimum=0.0,
-                                  exclusive_minimum=True)
+    camera_rate_hz: float = param(10.0, 'Hz', 'camera frames per simulated second', minimum=MIN_RATE_HZ)
     camera_width: int = param(320, 'px', 'image width', minimum=8, maximum=4096)
     camera_height: int = param(240, 'px', 'image height', minimum=8, maximum=4096)
     camera_fov: float = param(1.085, 'rad', 'horizontal field of view', minimum=0.1, maximum=3.0)

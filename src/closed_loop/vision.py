@@ -140,8 +140,12 @@ def detect_red_encoded(array: numpy.ndarray, encoding: str,
 
     rgb8 is converted to HSV directly, with no BGR copy. mono8, shape (height, width), has no
     colour: the result is never detected, with area 0 and an all-zero mask. Raises VisionError
-    naming ``encoding`` for other encodings and ``array`` for a shape or dtype that does not fit.
+    naming ``encoding`` for other encodings, ``array`` for a shape or dtype that does not fit, and
+    for an image with no pixels (0 rows or columns), of which nothing can be said either way.
     """
+    if getattr(array, 'size', None) == 0:
+        raise VisionError('array: the image has no pixels (%s), so it shows neither red nor its absence'
+                          % ('x'.join(str(n) for n in array.shape[1::-1])))
     if encoding == 'mono8':
         if not isinstance(array, numpy.ndarray) or array.dtype != numpy.uint8 or array.ndim != 2:
             raise VisionError('array: expected a (height, width) uint8 array for mono8, got %s'

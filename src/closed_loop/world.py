@@ -30,6 +30,14 @@ import yaml
 #: robot is about 0.30 m x 0.24 m, so its half-diagonal is 0.19 m; the rest is a safety margin.
 ROBOT_CLEARANCE_RADIUS_M = 0.25
 
+#: Limits checked before anything is built, so a wrong file (a log, a binary, a generated monster) is
+#: refused in moments rather than loaded for minutes: the largest world file (bytes) and the most
+#: obstacles. A world at the limits loads in about 2 s.
+MAX_WORLD_FILE_BYTES = 1024 * 1024
+MAX_OBSTACLES = 2000
+#: At most this many characters of an offending value are quoted in an error message.
+MAX_QUOTE_CHARS = 60
+
 DEFAULT_GROUND_COLOR = (0.55, 0.55, 0.55, 1.0)
 DEFAULT_OBSTACLE_COLOR = (0.5, 0.5, 0.5, 1.0)
 DEFAULT_WALL_THICKNESS_M = 0.1
@@ -82,8 +90,16 @@ class WorldError(ValueError):
         self.field = field
         self.expected = expected
         self.got = None if got is _MISSING else got
-        told = 'nothing (the key is missing)' if got is _MISSING else repr(got)
+        told = 'nothing (the key is missing)' if got is _MISSING else quote(got)
         super().__init__('%s: %s: expected %s, got %s' % (source, field, expected, told))
+
+
+def quote(value, limit=MAX_QUOTE_CHARS):
+    """``repr(value)`` on one line, cut to ``limit`` characters with the total length said."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    return '%s... (%d characters in all)' % (text[:limit], len(text))
 
 
 @dataclass(frozen=True)
@@ -296,6 +312,9 @@ def parse_world(data, source='<string>'):
         raw_obstacles = []
     if not isinstance(raw_obstacles, list):
         check.fail('obstacles', 'a list of obstacles', raw_obstacles)
+    if len(raw_obstacles) > MAX_OBSTACLES:
+        check.fail('obstacles', 'at most %d obstacles' % MAX_OBSTACLES,
+                   '%d obstacles' % len(raw_obstacles))
     obstacles = []
     seen = {}
     for index, raw in enumerate(raw_obstacles):
@@ -414,13 +433,22 @@ def _parse_motion(check, value, field, origin):
 def load_world(path):
     """Read the world file at ``path`` and return a :class:`World` (``source`` is ``path``).
 
-    A missing or unreadable file, a YAML syntax error (with its line) and every problem
-    :func:`parse_world` finds raise :class:`WorldError`.
+    A missing or unreadable file, one over ``MAX_WORLD_FILE_BYTES``, a YAML syntax error (with its
+    line) and every problem :func:`parse_world` finds (more than ``MAX_OBSTACLES`` obstacles among
+    them) raise :class:`WorldError`, whose message is one line and quotes at most a short excerpt.
     """
     path = os.fspath(path)
     try:
         with open(path, 'r', encoding='utf-8') as stream:
-            text = stream.read()
+            size = os.fstat(stream.fileno()).st_size
+            if size > MAX_WORLD_FILE_BYTES:
+                raise WorldError(path, '(file)', 'a world file of at most %d bytes' % MAX_WORLD_FILE_BYTES,
+                                 '%d bytes' % size)
+            # One byte more than the limit tells a file that grows (or a pipe) from one that fits.
+            text = stream.read(MAX_WORLD_FILE_BYTES + 1)
+            if len(text.encode('utf-8')) > MAX_WORLD_FILE_BYTES:
+                raise WorldError(path, '(file)', 'a world file of at most %d bytes'
+                                 % MAX_WORLD_FILE_BYTES, 'more')
     except OSError as error:
         raise WorldError(path, '(file)', 'a readable world file',
                          error.strerror or str(error)) from None

@@ -9,7 +9,7 @@ from std_msgs.msg import ColorRGBA, Float32, String
 from visualization_msgs.msg import Marker
 
 from closed_loop import markers
-from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.common import init_node, load_settings
 
 ARROW_SHAFT_M = 0.04
 ARROW_HEAD_M = 0.08
@@ -117,6 +117,6 @@ class CmdVelMarker:
 
 
 def main():
-    rospy.init_node('cmd_vel_marker')
+    init_node('cmd_vel_marker')
     CmdVelMarker()
     rospy.spin()

@@ -1,9 +1,44 @@
-"""Helpers shared by the node classes: settings from ``~`` parameters, stamps, shutdown."""
+"""Helpers shared by the node classes: start-up, settings from ``~`` parameters, stamps."""
+import os
 import sys
+import tempfile
 
+import rospkg
 import rospy
 
 from closed_loop.settings import SettingsError, from_params
+
+#: rospy's screen format with the node's name added, so every line says which node it is from. Used
+#: unless the user has set ROSCONSOLE_FORMAT; roslaunch's log files and /rosout name the node anyway.
+LOG_FORMAT = '[${severity}] [${time}] [${node}]: ${message}'
+
+
+def log_dir_problem(log_dir):
+    """Why a node cannot write its log file in ``log_dir``, or None when it can."""
+    try:
+        os.makedirs(log_dir, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=log_dir, prefix='.closed_loop-probe-'):
+            pass
+    except OSError as error:
+        return error.strerror or str(error)
+    return None
+
+
+def init_node(name, **kwargs):
+    """``rospy.init_node(name)``, after the two checks every closed_loop node makes first.
+
+    The log format names the node (:data:`LOG_FORMAT`, unless ROSCONSOLE_FORMAT is set). A log folder
+    that cannot be written (rospy would fail with a traceback) ends the process with one line that
+    names the folder and the fix, and status 1.
+    """
+    os.environ.setdefault('ROSCONSOLE_FORMAT', LOG_FORMAT)
+    log_dir = rospkg.get_log_dir()
+    problem = log_dir_problem(log_dir)
+    if problem is not None:
+        sys.stderr.write('%s: cannot write its log in %s (%s); set ROS_LOG_DIR to a writable folder\n'
+                         % (name, log_dir, problem))
+        sys.exit(1)
+    rospy.init_node(name, **kwargs)
 
 
 def load_settings(cls):

@@ -18,6 +18,23 @@ def scan_from_msg(msg):
                 ranges=msg.ranges)
 
 
+def message_callerid(msg):
+    """The caller id (node name) of the publisher a received message came from, or None if unknown."""
+    header = getattr(msg, '_connection_header', None) or {}
+    return header.get('callerid')
+
+
+def connected_publishers(subscriber):
+    """Caller ids of the publishers ``subscriber`` (a rospy.Subscriber) is connected to now.
+
+    rospy keeps them on its connections (``callerid_pub``, from each publisher's connection header);
+    an unknown layout gives [] and the per-message caller ids still count.
+    """
+    impl = getattr(subscriber, 'impl', None)
+    connections = list(getattr(impl, 'connections', None) or [])
+    return [c.callerid_pub for c in connections if getattr(c, 'callerid_pub', 'unknown') != 'unknown']
+
+
 def twist(linear_x, angular_z):
     """A ``geometry_msgs/Twist`` with forward speed (m/s) and yaw rate (rad/s), all else zero.
 

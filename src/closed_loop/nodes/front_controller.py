@@ -1,5 +1,6 @@
 """The part stop_on_obstacle and state_machine_controller share: taking in scans, staleness, timers."""
 import threading
+import time
 
 import rospy
 from geometry_msgs.msg import Twist
@@ -7,8 +8,9 @@ from sensor_msgs.msg import LaserScan
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
-from closed_loop.nodes.conversions import scan_from_msg, twist_from_command
+from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist_from_command
 from closed_loop.scan import ScanError, sector_min
+from closed_loop.sources import SourceCheck
 
 # How often a repeated warning or error may reappear in the log (s).
 LOG_PERIOD_S = 2.0
@@ -19,15 +21,19 @@ class FrontController:
 
     The ``scan`` callback stores the front reading (``closed_loop.scan.SectorReading``) with its header
     stamp, and calls :meth:`control` at once when :meth:`react_now` says the reading is news that cannot
-    wait; a timer on the ROS clock calls :meth:`control` every ``1 / ~rate_hz`` s. A wall-clock watchdog
+    wait. A scan is only taken from one publisher in the expected frame (``~scan_frame``): while a
+    second node publishes on ``scan``, or a scan comes in another frame, every scan is refused, an
+    error names the publishers, and the controller stops (``closed_loop.sources.SourceCheck``); a timer on the ROS clock calls :meth:`control` every ``1 / ~rate_hz`` s. A wall-clock watchdog
     publishes zero while no scan has been received for ``~scan_timeout`` s of wall time, since a dead
     simulator stops ``/clock`` and with it the ROS-clock timer. Zero is also sent on shutdown.
 
     Parameters every front controller has (``closed_loop.decisions.FrontControlSettings``):
         ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around 0.
-        ``~rate_hz`` (Hz, default 10): control timer rate; also the watchdog's rate.
-        ``~scan_timeout`` (s, default 0.5): a scan older than this (ROS clock), or no scan received
-        for this long (wall clock), means stop.
+        ``~rate_hz`` (Hz, default 10, at least 1): control timer rate; also the watchdog's rate
+        (or twice per ``~scan_timeout``, if that is more often).
+        ``~scan_timeout`` (s, default 0.5, at most 5): a scan older than this (ROS clock), or no scan
+        received for this long (wall clock), means stop.
+        ``~scan_frame`` (default base_scan): the laser's frame; scans in another frame mean stop.
 
     Subclasses set ``self.settings`` (a ``FrontControlSettings``), create their own publishers in
     :meth:`setup`, and implement :meth:`react_now`, :meth:`decide` (called with the lock held) and
@@ -43,7 +49,8 @@ class FrontController:
         self._closing = False
         self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
         self.setup()
-        self._watchdog = SilenceWatchdog(settings.scan_timeout, period_s, self._on_silence)
+        self._source = SourceCheck(rospy.resolve_name('scan'), settings.scan_frame)
+        self._watchdog = SilenceWatchdog(settings.scan_timeout, settings.watchdog_period_s, self._on_silence)
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
         # reset=True: a ROS clock that jumps back (sim restart) restarts the timer instead of
         # killing its thread.
@@ -76,16 +83,23 @@ class FrontController:
 
     def _on_scan(self, msg):
         self._watchdog.kick()
-        try:
-            scan = scan_from_msg(msg)
-            reading = sector_min(scan, 0.0, self.settings.front_half_angle)
-            stamp_s = scan.stamp_s
-        except ScanError as error:
-            rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
+        refused = self._source.observe(message_callerid(msg), msg.header.frame_id, time.monotonic(),
+                                       connected_publishers(self._scan_sub))
+        if refused is not None:
+            rospy.logerr_throttle(LOG_PERIOD_S, 'scan refused, stopping: %s', refused)
             reading, stamp_s = None, None
+        else:
+            try:
+                scan = scan_from_msg(msg)
+                reading = sector_min(scan, 0.0, self.settings.front_half_angle)
+                stamp_s = scan.stamp_s
+            except ScanError as error:
+                rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
+                reading, stamp_s = None, None
         with self.lock:
             self.reading, self.stamp_s = reading, stamp_s
-            urgent = self.react_now(reading, self.age_s(stamp_s))
+            # A refused scan is news too: the stop must not wait for the timer.
+            urgent = refused is not None or self.react_now(reading, self.age_s(stamp_s))
         if urgent:
             self.control()
 

@@ -5,7 +5,7 @@ import rospy
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float32
 
-from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
 from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
@@ -73,6 +73,6 @@ class ObstacleDetector:
 
 
 def main():
-    rospy.init_node('obstacle_detector')
+    init_node('obstacle_detector')
     ObstacleDetector()
     rospy.spin()

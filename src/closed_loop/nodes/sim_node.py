@@ -16,8 +16,10 @@ from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 
 from closed_loop import drive, image_encoding, robot_model, world as world_mod
-from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.conversions import connected_publishers, message_callerid
 from closed_loop.simulation import SimSettings, Simulation
+from closed_loop.sources import SourceCheck
 
 ODOM_FRAME = 'odom'
 WORLD_FRAME = 'world'
@@ -25,6 +27,8 @@ WORLD_FRAME = 'world'
 MAX_LAG_S = 0.25
 # Time a service call waits for the loop to carry out its request.
 SERVICE_WAIT_S = 5.0
+# How often a repeated warning may reappear in the log (s).
+LOG_PERIOD_S = 2.0
 # Idle sleep while paused.
 PAUSED_POLL_S = 0.01
 # A small diagonal covariance for odometry (m^2, rad^2), so consumers that weigh it do not divide by 0.
@@ -51,7 +55,9 @@ class SimNode:
     Subscribes:
         cmd_vel (geometry_msgs/Twist): linear.x (m/s) and angular.z (rad/s); a command with NaN/Inf in
             any field is rejected with a throttled warning and brakes the robot. With no command for
-            ``~cmd_vel_timeout`` s the robot brakes to zero.
+            ``~cmd_vel_timeout`` s the robot brakes to zero. A command beyond ``~max_linear_speed`` or
+            ``~max_angular_speed`` is clipped with a throttled warning giving the value and the limit;
+            a second node publishing on cmd_vel is reported (throttled, naming both).
     Publishes:
         clock (rosgraph_msgs/Clock): simulated time, after every physics step at real time (at most
             ``~max_clock_rate_hz`` per wall second when faster), and before every scan and camera frame.
@@ -100,6 +106,7 @@ class SimNode:
         if self.settings.camera:
             self.image_pub = rospy.Publisher('camera/image_raw', Image, queue_size=2)
             self.info_pub = rospy.Publisher('camera/camera_info', CameraInfo, queue_size=2)
+        self._cmd_source = SourceCheck(rospy.resolve_name('cmd_vel'))
         self.cmd_sub = rospy.Subscriber('cmd_vel', Twist, self._on_cmd_vel, queue_size=10)
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))
         rospy.Service('~pause_physics', Empty, lambda _: self._request('pause'))
@@ -109,12 +116,21 @@ class SimNode:
 
     # -- inputs (other threads): store, and let the loop act -----------------------------------------------
     def _on_cmd_vel(self, msg):
+        conflict = self._cmd_source.observe(message_callerid(msg), None, time.monotonic(),
+                                            connected_publishers(self.cmd_sub))
+        if conflict is not None:
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: %s' % conflict.replace(
+                'stopping until only one remains', 'the base obeys each message as it comes'))
         try:
             twist = drive.validate_twist((msg.linear.x, msg.linear.y, msg.linear.z),
                                          (msg.angular.x, msg.angular.y, msg.angular.z))
         except drive.CommandError as error:
-            rospy.logwarn_throttle(1.0, 'sim_node: rejected cmd_vel: %s; braking' % error)
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: rejected cmd_vel: %s; braking' % error)
             twist = drive.STOPPED
+        for clipped in drive.clipped_fields(twist, self.settings.max_linear_speed,
+                                            self.settings.max_angular_speed):
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: cmd_vel from %s: %s'
+                                   % (message_callerid(msg) or 'an unknown publisher', clipped))
         with self._lock:
             self._pending_command = twist
 
@@ -307,5 +323,5 @@ class SimNode:
 
 
 def main():
-    rospy.init_node('sim_node')
+    init_node('sim_node')
     SimNode().run()

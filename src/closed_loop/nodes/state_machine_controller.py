@@ -4,7 +4,7 @@ from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import input_problem
-from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist, twist_from_command
 from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
 from closed_loop.state_machine import BackUpSettings, BackUpStateMachine, State
@@ -73,6 +73,6 @@ class StateMachineController(FrontController):
 
 
 def main():
-    rospy.init_node('state_machine_controller')
+    init_node('state_machine_controller')
     StateMachineController()
     rospy.spin()

@@ -3,7 +3,7 @@ import rospy
 from std_msgs.msg import String
 
 from closed_loop.decisions import StopSettings, Zone, decide, stop
-from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist
 from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
 
@@ -84,6 +84,6 @@ class StopOnObstacle(FrontController):
 
 
 def main():
-    rospy.init_node('stop_on_obstacle')
+    init_node('stop_on_obstacle')
     StopOnObstacle()
     rospy.spin()

@@ -6,7 +6,7 @@ from geometry_msgs.msg import Twist
 from std_srvs.srv import Trigger, TriggerResponse
 
 from closed_loop.commands import STOP, PublisherSettings, command_for
-from closed_loop.nodes.common import load_settings
+from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist_from_command
 
 # How often the steady "Publishing: ..." line may repeat in the log (s).
@@ -80,6 +80,6 @@ class VelocityPublisher:
 
 
 def main():
-    rospy.init_node('velocity_publisher')
+    init_node('velocity_publisher')
     VelocityPublisher()
     rospy.spin()

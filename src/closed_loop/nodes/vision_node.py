@@ -5,8 +5,8 @@ from sensor_msgs.msg import Image
 from std_msgs.msg import Bool, UInt32
 
 from closed_loop.image_encoding import ImageEncodingError, array_to_image, image_to_array
-from closed_loop.nodes.common import load_settings
-from closed_loop.vision import SUPPORTED_ENCODINGS, VisionSettings, detect_red_encoded
+from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.vision import SUPPORTED_ENCODINGS, VisionError, VisionSettings, detect_red_encoded
 
 #: Socket buffer of the image subscription. rospy's 64 KiB default holds less than one camera
 #: frame, so frames would queue in the socket and ``queue_size=1`` would not drop stale ones;
@@ -74,7 +74,12 @@ class VisionNode(object):
             return
         if msg.encoding == 'mono8':
             rospy.logwarn_once('mono8 images have no colour: red_detected stays false for them')
-        detection = detect_red_encoded(array, msg.encoding, self._settings)
+        try:
+            detection = detect_red_encoded(array, msg.encoding, self._settings)
+        except VisionError as error:
+            rospy.logerr_throttle(period, 'Dropped a %dx%d %s image: %s',
+                                  msg.width, msg.height, msg.encoding, error)
+            return
         self._detected_pub.publish(Bool(data=detection.detected))
         if detection.detected:
             u, v = detection.centroid_px
@@ -92,6 +97,6 @@ class VisionNode(object):
 
 def main():
     """Start the vision node and serve until shutdown."""
-    rospy.init_node('vision_node')
+    init_node('vision_node')
     VisionNode()
     rospy.spin()
