@@ -17,6 +17,8 @@ import sys
 import time
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
+sys.path.insert(0, os.path.join(ROOT, 'src'))
+from closed_loop import netenv  # noqa: E402  (the graphs these start stay on loopback)
 BENCH_GLOB = os.path.join(ROOT, 'test', 'bench', 'bench_*.py')
 # A benchmark still running after this long is stopped and counted as failed.
 BENCH_TIME_LIMIT_S = 600
@@ -50,6 +52,7 @@ def run_bench(path):
 
 
 def main():
+    netenv.apply_loopback_defaults(os.environ)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('-k', help='only benchmarks whose file name contains this')
     args = parser.parse_args()

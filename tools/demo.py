@@ -17,7 +17,7 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import robot_model, world as world_mod  # noqa: E402
+from closed_loop import netenv, robot_model, world as world_mod  # noqa: E402
 
 STATUS_PERIOD_S = 1.0
 AT_REST_MPS = 0.01
@@ -97,6 +97,18 @@ class Monitor:
                 self.rest_since = time.monotonic()
 
 
+def launch_failure_lines(log_path, most=8):
+    """The lines of the launch log that say why it ended: FATAL and ERROR lines, and roslaunch's word that a
+    required process died (roslaunch itself then exits 0, as ROS 1 does)."""
+    try:
+        with open(log_path, errors='replace') as log:
+            lines = [line.rstrip() for line in log if 'FATAL' in line or '[ERROR]' in line
+                     or 'REQUIRED process' in line or 'has died' in line]
+    except OSError:
+        return []
+    return lines[-most:]
+
+
 def fmt(value, unit='', spec='%.2f'):
     if value is None:
         return '-'
@@ -110,6 +122,7 @@ def main():
     parser.add_argument('--seconds', type=float, default=30.0, help='wall-clock bound of the run')
     parser.add_argument('launch_args', nargs='*', help='extra roslaunch args (name:=value)')
     args = parser.parse_args()
+    netenv.apply_loopback_defaults(os.environ)
 
     world = world_mod.load_world(world_mod.resolve_world(args.world, os.path.join(ROOT, 'worlds')))
     log_path = os.path.join(ROOT, 'test_output', 'demo.log')
@@ -134,7 +147,9 @@ def main():
         next_status = started
         while time.monotonic() - started < args.seconds:
             if launch.poll() is not None:
-                print('\ndemo: roslaunch exited early (code %s); see %s' % (launch.returncode, log_path))
+                print('\ndemo: the launch ended early (roslaunch exit code %s); see %s' % (launch.returncode, log_path))
+                for line in launch_failure_lines(log_path):
+                    print('  ' + line)
                 return 1
             now = time.monotonic()
             with mon.lock:

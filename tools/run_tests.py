@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
-"""Run every test of closed_loop -- pytest unit tests, then each rostest -- and print one closing line.
+"""Run every test of closed_loop -- pytest unit tests, system tests, then each rostest -- and print one closing line.
 
 Usage (inside ``source env.sh``; ``make test`` does that):
     python3 tools/run_tests.py [--unit-only] [--rostest-only] [-k NAME]
+
+Unit tests (test/unit) need no master. System tests (test/system) start real ROS processes outside
+rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces -- and need root.
 
 Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed``
 (pytest and rostest counted together); the exit status is non-zero if anything failed or nothing ran.
@@ -17,6 +20,8 @@ import time
 import xml.etree.ElementTree as ET
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
+sys.path.insert(0, os.path.join(ROOT, 'src'))
+from closed_loop import netenv  # noqa: E402  (the graphs these start stay on loopback)
 OUT = os.path.join(ROOT, 'test_output')
 # A rostest file that hangs past this is killed and counted failed; each file also has its own time-limit.
 ROSTEST_HANG_LIMIT_S = 300
@@ -39,13 +44,13 @@ def count_junit(path):
     return passed, failed, skipped, names
 
 
-def run_unit(args):
-    xml = os.path.join(OUT, 'unit.xml')
-    cmd = [sys.executable, '-m', 'pytest', os.path.join(ROOT, 'test', 'unit'), '-q', '-p', 'no:cacheprovider',
+def run_unit(args, layer='unit'):
+    xml = os.path.join(OUT, layer + '.xml')
+    cmd = [sys.executable, '-m', 'pytest', os.path.join(ROOT, 'test', layer), '-q', '-p', 'no:cacheprovider',
            '--junitxml', xml]
     if args.k:
         cmd += ['-k', args.k]
-    print('== unit tests: %s' % ' '.join(cmd[2:]), flush=True)
+    print('== %s tests: %s' % (layer, ' '.join(cmd[2:])), flush=True)
     code = subprocess.call(cmd, cwd=ROOT)
     if not os.path.exists(xml):
         return 0, 1, 0, ['pytest (exit %d, no results)' % code]
@@ -134,6 +139,7 @@ def run_rostests(args):
 
 
 def main():
+    netenv.apply_loopback_defaults(os.environ)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--unit-only', action='store_true')
     parser.add_argument('--rostest-only', action='store_true')
@@ -146,6 +152,8 @@ def main():
     parts = []
     if not args.rostest_only:
         parts.append(run_unit)
+    if not args.unit_only and not args.rostest_only:
+        parts.append(lambda a: run_unit(a, 'system'))
     if not args.unit_only:
         parts += [run_launch_checks, run_rostests]
     for part in parts:

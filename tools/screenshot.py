@@ -17,6 +17,7 @@ import cv2
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
+from closed_loop import netenv  # noqa: E402
 from closed_loop.screen import VirtualScreen  # noqa: E402
 
 MASTER_PORT = 11397
@@ -26,6 +27,7 @@ RENDER_SETTLE_S = 3.0
 
 
 def main():
+    netenv.apply_loopback_defaults(os.environ)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--world', default='red_box')
     parser.add_argument('--out', default=os.path.join(ROOT, 'rviz', 'screenshot.png'))

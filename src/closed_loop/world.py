@@ -36,7 +36,7 @@ ROBOT_CLEARANCE_RADIUS_M = 0.25
 MAX_WORLD_FILE_BYTES = 1024 * 1024
 MAX_OBSTACLES = 2000
 #: At most this many characters of an offending value are quoted in an error message.
-MAX_QUOTE_CHARS = 60
+MAX_QUOTE_CHARS = 120
 
 DEFAULT_GROUND_COLOR = (0.55, 0.55, 0.55, 1.0)
 DEFAULT_OBSTACLE_COLOR = (0.5, 0.5, 0.5, 1.0)

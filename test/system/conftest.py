@@ -1,0 +1,75 @@
+"""Fixtures of the system tests: real ROS processes (a master, nodes, roslaunch) on loopback, each test on
+its own free port, with logs in the test's temporary folder."""
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
+sys.path.insert(0, os.path.join(ROOT, 'src'))
+# Bounds that only catch hangs.
+MASTER_WAIT_S = 20.0
+
+
+def free_port():
+    """A TCP port free on 127.0.0.1 now."""
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        return s.getsockname()[1]
+
+
+def ros_env(tmp_path, port, **extra):
+    """The environment of a graph on loopback with its master on ``port`` and its logs under ``tmp_path``."""
+    env = dict(os.environ, ROS_IP='127.0.0.1', ROS_MASTER_URI='http://127.0.0.1:%d' % port,
+               ROS_HOME=str(tmp_path / 'ros_home'), ROS_LOG_DIR=str(tmp_path / 'ros_log'))
+    env.pop('ROS_HOSTNAME', None)
+    env.update(extra)
+    return env
+
+
+def master_up(port):
+    with socket.socket() as s:
+        s.settimeout(0.2)
+        return s.connect_ex(('127.0.0.1', port)) == 0
+
+
+def wait_master(port, process=None, timeout_s=MASTER_WAIT_S):
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if master_up(port):
+            return
+        if process is not None and process.poll() is not None:
+            raise AssertionError('the launch ended before its master came up (exit %s)' % process.returncode)
+        time.sleep(0.1)
+    raise AssertionError('no master on port %d within %g s' % (port, timeout_s))
+
+
+def stop(process, sig=signal.SIGINT, timeout_s=20.0):
+    """End a process group started with start_new_session=True: ``sig``, then SIGKILL."""
+    if process.poll() is None:
+        try:
+            os.killpg(process.pid, sig)
+            process.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait(5)
+        except ProcessLookupError:
+            pass
+
+
+@pytest.fixture
+def roscore(tmp_path):
+    """A master (roscore) on a free loopback port; yields its environment."""
+    port = free_port()
+    env = ros_env(tmp_path, port)
+    process = subprocess.Popen(['roscore', '-p', str(port)], env=env, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        wait_master(port, process)
+        yield env
+    finally:
+        stop(process)

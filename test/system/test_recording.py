@@ -1,0 +1,83 @@
+"""Recording that cannot lie: the folder and name reach rosbag as plain arguments (spaces, quotes and backticks
+are just characters), and a recorder that cannot write ends the run with a message naming the folder."""
+import glob
+import os
+import subprocess
+import sys
+import time
+
+import rosbag
+
+from conftest import ROOT, free_port, ros_env, stop, wait_master
+
+RECORD_S = 6.0
+
+
+def test_a_folder_name_with_space_quotes_and_backticks_gets_the_bag(tmp_path):
+    canary = tmp_path / 'ran'
+    folder = tmp_path / ('bags with space \'single\' "double" `touch %s`' % canary)
+    port = free_port()
+    env = ros_env(tmp_path, port)
+    launch = subprocess.Popen(['roslaunch', '-p', str(port), 'closed_loop', 'record.launch',
+                               'bag_dir:=%s' % folder, 'bag_name:=it\'s a "run"', 'images:=false'],
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+    talker = None
+    try:
+        wait_master(port, launch)
+        talker = subprocess.Popen(['rostopic', 'pub', '-r', '20', '/cmd_vel', 'geometry_msgs/Twist',
+                                   '{linear: {x: 0.25}}'], env=env, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.STDOUT, start_new_session=True)
+        time.sleep(RECORD_S)
+        assert launch.poll() is None, 'the launch ended: %s' % launch.stdout.read().decode(errors='replace')
+    finally:
+        if talker is not None:
+            stop(talker)
+        stop(launch)
+    out = launch.stdout.read().decode(errors='replace')
+    assert not canary.exists(), 'a backtick in bag_dir ran a command'
+    bags = glob.glob(os.path.join(glob.escape(str(folder)), 'it\'s a "run"_*.bag'))
+    assert len(bags) == 1, 'bags in %r: %s\n%s' % (str(folder), os.listdir(folder) if folder.exists() else None, out)
+    with rosbag.Bag(bags[0]) as bag:
+        speeds = [m.linear.x for _, m, _ in bag.read_messages(topics=['/cmd_vel'])]
+    assert speeds and all(v == 0.25 for v in speeds), speeds[:5]
+
+
+def run_demo(tmp_path, *launch_args, seconds=30):
+    port = free_port()
+    env = ros_env(tmp_path, port)
+    done = subprocess.run([sys.executable, os.path.join(ROOT, 'tools', 'demo.py'), '--seconds', str(seconds)]
+                          + list(launch_args), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          timeout=seconds + 60)
+    return done.returncode, done.stdout.decode(errors='replace')
+
+
+def test_a_read_only_bag_folder_fails_the_run(tmp_path):
+    read_only = tmp_path / 'ro'
+    read_only.mkdir()
+    # Root writes through permission bits, so the folder is a read-only mount, as on a real locked disk.
+    subprocess.run(['mount', '-t', 'tmpfs', '-o', 'ro,size=1m', 'closed_loop_test', str(read_only)], check=True)
+    try:
+        code, out = run_demo(tmp_path, 'record:=true', 'bag_dir:=%s' % (read_only / 'bags'), 'camera:=false')
+    finally:
+        subprocess.run(['umount', str(read_only)], check=True)
+    assert code != 0, out
+    assert 'recording failed' in out and str(read_only / 'bags') in out, out
+    assert 'REQUIRED process' in out, out
+
+
+def test_a_bag_folder_that_is_a_file_fails_the_run(tmp_path):
+    a_file = tmp_path / 'file'
+    a_file.write_text('x')
+    code, out = run_demo(tmp_path, 'record:=true', 'bag_dir:=%s' % (a_file / 'bags'), 'camera:=false')
+    assert code != 0 and 'recording failed' in out and str(a_file) in out, out
+
+
+def test_too_little_free_space_ends_the_launch(tmp_path):
+    port = free_port()
+    done = subprocess.run(['roslaunch', '-p', str(port), 'closed_loop', 'record.launch',
+                           'bag_dir:=%s' % (tmp_path / 'bags'), 'min_free_mb:=%d' % (2 ** 31 - 1)],
+                          env=ros_env(tmp_path, port), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
+    out = done.stdout.decode(errors='replace')
+    # roslaunch's own status stays 0 when a required node dies (ROS 1); the launch ends, and says why.
+    assert 'recording failed' in out and 'MiB free' in out and str(tmp_path / 'bags') in out, out
+    assert 'REQUIRED process [record' in out, out
