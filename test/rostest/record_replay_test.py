@@ -34,6 +34,9 @@ RECORD_S = 8.0
 # Recording starts and ends mid-stream, so the bag's first and last few scans may have no
 # recorded distance (or the other way round).
 END_SLACK_MESSAGES = 3
+# rosbag record subscribes to each topic on its own; under load the simulator can answer the /scan
+# subscription a second or more after the detector answers /obstacle_distance's, so the live distances
+# may begin well before the recorded scans. The offset is searched over the whole bag.
 # The replayed distances must vary, or matching them against the live ones proves little.
 MIN_DISTINCT_DISTANCES = 10
 
@@ -61,9 +64,9 @@ def wait_until(condition, timeout_s, what):
 
 def best_alignment(replayed, live):
     """(offset, overlap) with ``replayed[i] == live[i + offset]`` over the whole overlap, the longest
-    such overlap for offsets within END_SLACK_MESSAGES; (None, 0) when no offset matches."""
+    such overlap over every offset; (None, 0) when no offset matches."""
     best = (None, 0)
-    for offset in range(-END_SLACK_MESSAGES, END_SLACK_MESSAGES + 1):
+    for offset in range(-len(replayed) + 1, len(live)):
         pairs = [(value, live[i + offset]) for i, value in enumerate(replayed) if 0 <= i + offset < len(live)]
         if pairs and all(same_float(a, b) for a, b in pairs) and len(pairs) > best[1]:
             best = (offset, len(pairs))
