@@ -68,8 +68,8 @@ class Monitor:
         rospy.Subscriber('/obstacle_distance', Float32, lambda m: self._set('distance', m.data), queue_size=10)
         rospy.Subscriber('/red_detected', Bool, lambda m: self._set('red', m.data), queue_size=10)
         rospy.Subscriber('/contact_count', UInt32, lambda m: self._set('contacts', m.data), queue_size=10)
-        rospy.Subscriber('/%s/zone' % controller, String, self._on_zone, queue_size=10)
-        rospy.Subscriber('/%s/state' % controller, String, self._on_zone, queue_size=10)
+        # Every controller publishes its mode on ~mode (the controllers' shared contract).
+        rospy.Subscriber('/%s/mode' % controller, String, self._on_zone, queue_size=10)
 
     def _set(self, name, value):
         with self.lock:

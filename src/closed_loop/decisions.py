@@ -180,6 +180,21 @@ def decide(reading, reading_age_s, previous_zone, settings):
     return Decision(zone, speed_for_zone(zone, settings), reason)
 
 
+def react_now(reading, reading_age_s, previous_zone, settings):
+    # type: (object, Optional[float], Optional[Zone], StopSettings) -> bool
+    """Whether a new ``reading`` must be acted on at once rather than at the next timer tick.
+
+    Yes for the first decision (``previous_zone`` None: the end of start-up, before which nothing was
+    sent); otherwise only with ``settings.react_immediately`` and when :func:`decide` would move to a
+    more dangerous zone than ``previous_zone`` (a missing, stale or invalid reading counts: it is STOP).
+    """
+    if previous_zone is None:
+        return True
+    if not settings.react_immediately:
+        return False
+    return decide(reading, reading_age_s, previous_zone, settings).zone > previous_zone
+
+
 class SilenceWatchdog:
     """Calls ``on_silence(silent_s)`` every ``period_s`` while nothing has arrived for ``timeout_s``.
 

@@ -17,7 +17,7 @@ class MarkerSettings:
     horizon: float = param(1.0, 's', 'the arrow ends where the command would take the robot in this time '
                            '(so its length is proportional to linear.x and it bends with angular.z)',
                            minimum=0.0, exclusive_minimum=True)
-    slow_speed: float = param(0.2, 'm/s', 'with no zone topic, commands up to this speed are coloured SLOW',
+    slow_speed: float = param(0.2, 'm/s', 'when the mode is not a zone, commands up to this speed are coloured SLOW',
                               minimum=0.0)
     command_timeout: float = param(0.5, 's', 'no cmd_vel for this long: the arrow is removed',
                                    minimum=0.0, exclusive_minimum=True)
@@ -26,19 +26,19 @@ class MarkerSettings:
 
 
 def zone_from_command(linear_x, slow_speed):
-    """A zone for a command when no controller reports one: stopped, slow, or cruising."""
+    """A colour zone for a command when the controller's mode does not say one: stopped, slow (or
+    reversing, which calls for care), or cruising."""
     if linear_x == 0.0:
         return STOP
-    return SLOW if abs(linear_x) <= slow_speed else CLEAR
+    return SLOW if linear_x < 0.0 or linear_x <= slow_speed else CLEAR
 
 
 def normalise_zone(name):
-    """A controller's zone or state name as one of CLEAR / SLOW / STOP (BACKING_UP counts as SLOW,
-    EXPLORING as CLEAR), or None if it is not one we know."""
+    """A controller's mode as a colour zone when it is one of CLEAR / SLOW / STOP (any case), else None:
+    then the colour comes from the command (:func:`zone_from_command`). The marker knows no controller's
+    own mode names (EXPLORING, BACKING_UP, ...): it shows them as text."""
     name = (name or '').strip().upper()
-    if name in ZONE_COLOURS:
-        return name
-    return {'EXPLORING': CLEAR, 'BACKING_UP': SLOW}.get(name)
+    return name if name in ZONE_COLOURS else None
 
 
 def arrow_end(linear_x, angular_z, horizon_s):

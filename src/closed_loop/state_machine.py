@@ -44,6 +44,14 @@ class BackUpSettings(FrontControlSettings):
                                 % self.backup_speed)
 
 
+def react_now(state, reading, settings):
+    """Whether a new front ``reading`` (a SectorReading or None) must be acted on at once: a trusted
+    reading closer than ``trigger_distance`` while EXPLORING (backing up starts now, not at the next
+    tick). A stale or invalid reading is caught by the timer's own check."""
+    return (state is State.EXPLORING and reading is not None and reading.trusted
+            and reading.distance_m < settings.trigger_distance)
+
+
 def _check_number(name, value, unit, allow_infinite):
     if not isinstance(value, numbers.Real) or isinstance(value, bool) or math.isnan(value):
         raise StateMachineError('%s: expected a number of %s, got %r' % (name, unit, value))

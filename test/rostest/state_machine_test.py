@@ -24,7 +24,7 @@ class StateMachineInLoop(unittest.TestCase):
         truth = harness.Latest('base_pose_ground_truth', harness.Odometry, keep_all=True)
         contacts = harness.Latest('contact_count', UInt32)
         states = []
-        rospy.Subscriber('state_machine_controller/state', String,
+        rospy.Subscriber('state_machine_controller/mode', String,
                          lambda m: states.append((rospy.get_time(), m.data)), queue_size=20)
         truth.wait()
         while not rospy.is_shutdown():

@@ -251,3 +251,20 @@ def test_watchdog_thread_does_not_count_its_own_stall_as_silence():
 def test_watchdog_rejects_bad_times(timeout, period, field):
     with pytest.raises(DecisionError, match='^%s:' % field):
         SilenceWatchdog(timeout, period, lambda silent_s: None)
+
+
+def test_react_now_first_decision_and_new_danger_only():
+    from closed_loop.decisions import react_now
+    from closed_loop.scan import SectorReading
+    from closed_loop.settings import check
+    settings = check(StopSettings())
+    near, far = SectorReading(0.3, 10, 10), SectorReading(2.0, 10, 10)
+    assert react_now(far, 0.0, None, settings)            # the first decision, whatever it says
+    assert react_now(near, 0.0, Zone.CLEAR, settings)     # new danger
+    assert not react_now(far, 0.0, Zone.CLEAR, settings)  # nothing new
+    assert not react_now(far, 0.0, Zone.STOP, settings)   # safer: wait for the tick
+    assert react_now(None, None, Zone.SLOW, settings)     # no usable scan is STOP
+    assert react_now(near, 9.0, Zone.CLEAR, settings)     # stale is STOP
+    timer_only = check(StopSettings(react_immediately=False))
+    assert not react_now(near, 0.0, Zone.CLEAR, timer_only)
+    assert react_now(near, 0.0, None, timer_only)

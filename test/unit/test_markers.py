@@ -30,7 +30,7 @@ def test_zone_from_command(speed, zone):
 
 
 @pytest.mark.parametrize('name, zone', [('STOP', 'STOP'), ('slow', 'SLOW'), (' CLEAR ', 'CLEAR'),
-                                        ('EXPLORING', 'CLEAR'), ('BACKING_UP', 'SLOW'), ('dancing', None),
+                                        ('EXPLORING', None), ('BACKING_UP', None), ('dancing', None),
                                         ('', None)])
 def test_controller_zone_names(name, zone):
     assert markers.normalise_zone(name) == zone

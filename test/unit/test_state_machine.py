@@ -116,3 +116,16 @@ def test_backup_speed_must_be_negative():
 def test_single_field_limits(field, value):
     with pytest.raises(SettingsError, match='~%s' % field):
         check(BackUpSettings(**{field: value}))
+
+
+def test_react_now_only_for_a_trusted_obstacle_while_exploring():
+    from closed_loop.scan import SectorReading
+    from closed_loop.settings import check
+    from closed_loop.state_machine import BackUpSettings, State, react_now
+    settings = check(BackUpSettings())
+    near, far, invalid = SectorReading(0.3, 5, 5), SectorReading(1.0, 5, 5), SectorReading(float('nan'), 0, 5)
+    assert react_now(State.EXPLORING, near, settings)
+    assert not react_now(State.EXPLORING, far, settings)
+    assert not react_now(State.BACKING_UP, near, settings)
+    assert not react_now(State.EXPLORING, invalid, settings)
+    assert not react_now(State.EXPLORING, None, settings)

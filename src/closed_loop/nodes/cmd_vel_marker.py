@@ -22,8 +22,8 @@ class CmdVelMarker:
 
     Subscribes:
         cmd_vel (geometry_msgs/Twist): the command to draw.
-        zone (std_msgs/String): optional; a controller's zone or state (stop_on_obstacle's ``~zone``,
-            state_machine_controller's ``~state``; remap it). Without it the colour comes from the command.
+        mode (std_msgs/String): optional; a controller's ``~mode`` (remap it). CLEAR / SLOW / STOP give
+            the colour; any other mode is shown as text, and the colour comes from the command.
         obstacle_distance (std_msgs/Float32): shown as text above the robot.
     Publishes:
         cmd_vel_marker (visualization_msgs/Marker): an ARROW from the robot to where the command would take
@@ -40,11 +40,12 @@ class CmdVelMarker:
         self._cmd = None
         self._cmd_wall = None
         self._zone = None
+        self._mode = None
         self._distance = None
         self._arrow_pub = rospy.Publisher('cmd_vel_marker', Marker, queue_size=2)
         self._text_pub = rospy.Publisher('obstacle_distance_marker', Marker, queue_size=2)
         rospy.Subscriber('cmd_vel', Twist, self._on_cmd, queue_size=5)
-        rospy.Subscriber('zone', String, self._on_zone, queue_size=5)
+        rospy.Subscriber('mode', String, self._on_mode, queue_size=5)
         rospy.Subscriber('obstacle_distance', Float32, self._on_distance, queue_size=5)
         # Wall-clock timer: markers are for a person watching, and must update even if /clock stalls.
         self._stop = threading.Event()
@@ -57,8 +58,9 @@ class CmdVelMarker:
             self._cmd = (msg.linear.x, msg.angular.z)
             self._cmd_wall = time.monotonic()
 
-    def _on_zone(self, msg):
+    def _on_mode(self, msg):
         with self._lock:
+            self._mode = msg.data
             self._zone = markers.normalise_zone(msg.data)
 
     def _on_distance(self, msg):
@@ -83,7 +85,7 @@ class CmdVelMarker:
     def publish(self):
         s = self.settings
         with self._lock:
-            cmd, cmd_wall, zone, distance = self._cmd, self._cmd_wall, self._zone, self._distance
+            cmd, cmd_wall, zone, mode, distance = self._cmd, self._cmd_wall, self._zone, self._mode, self._distance
         arrow = self._marker(0, Marker.ARROW)
         fresh = cmd is not None and time.monotonic() - cmd_wall <= s.command_timeout
         if not fresh:
@@ -111,7 +113,7 @@ class CmdVelMarker:
         text.color = ColorRGBA(1.0, 1.0, 1.0, 1.0)
         line = markers.distance_text(distance)
         if fresh:
-            line += '\ncmd %.2f m/s, %.2f rad/s%s' % (cmd[0], cmd[1], (' (%s)' % zone) if zone else '')
+            line += '\ncmd %.2f m/s, %.2f rad/s%s' % (cmd[0], cmd[1], (' (%s)' % mode) if mode else '')
         text.text = line
         self._text_pub.publish(text)
 

@@ -5,6 +5,7 @@ import time
 import rospy
 from geometry_msgs.msg import Twist
 from sensor_msgs.msg import LaserScan
+from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
@@ -35,9 +36,13 @@ class FrontController:
         received for this long (wall clock), means stop.
         ``~scan_frame`` (default base_scan): the laser's frame; scans in another frame mean stop.
 
+    The controller contract: every controller publishes ``cmd_vel`` and its mode on ``~mode``
+    (std_msgs/String, latched; the name of a member of the controller's own mode enum), on every
+    change, through :meth:`publish_mode`. Nothing outside a controller needs to know its mode names.
+
     Subclasses set ``self.settings`` (a ``FrontControlSettings``), create their own publishers in
-    :meth:`setup`, and implement :meth:`react_now`, :meth:`decide` (called with the lock held) and
-    :meth:`on_silence`.
+    :meth:`setup`, and implement :meth:`react_now` (a call to their core's rule), :meth:`decide`
+    (called with the lock held) and :meth:`on_silence`.
     """
 
     def __init__(self, settings):
@@ -48,6 +53,8 @@ class FrontController:
         self.stamp_s = None
         self._closing = False
         self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
+        self.mode = None  # the mode enum member last published; None before the first
+        self._mode_pub = rospy.Publisher('~mode', String, queue_size=1, latch=True)
         self.setup()
         self._source = SourceCheck(rospy.resolve_name('scan'), settings.scan_frame)
         self._watchdog = SilenceWatchdog(settings.scan_timeout, settings.watchdog_period_s, self._on_silence)
@@ -75,6 +82,13 @@ class FrontController:
         raise NotImplementedError
 
     # -- shared ---------------------------------------------------------------------------------------------
+    def publish_mode(self, mode, why):
+        """Publish ``mode`` (an enum member) on ``~mode`` and log the change, if it is a change."""
+        if mode != self.mode:
+            rospy.loginfo('mode %s -> %s: %s', self.mode.name if self.mode is not None else '-', mode.name, why)
+            self.mode = mode
+            self._mode_pub.publish(String(data=mode.name))
+
     def age_s(self, stamp_s):
         """Age of a scan stamp on the ROS clock (s), or None for no scan."""
         if stamp_s is None:

@@ -1,13 +1,12 @@
 """state_machine_controller: the lesson's EXPLORING / BACKING_UP behaviour on ROS time."""
 import rospy
-from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import input_problem
 from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist, twist_from_command
 from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
-from closed_loop.state_machine import BackUpSettings, BackUpStateMachine, State
+from closed_loop.state_machine import BackUpSettings, BackUpStateMachine, react_now
 
 
 class StateMachineController(FrontController):
@@ -26,8 +25,9 @@ class StateMachineController(FrontController):
     Publications:
         ``cmd_vel`` (geometry_msgs/Twist): forward speed only, every ``1 / ~rate_hz`` s of ROS
         time, zero from the watchdog and on shutdown.
-        ``~state`` (std_msgs/String, latched): EXPLORING or BACKING_UP, at start and on every
-        transition.
+        ``~mode`` (std_msgs/String, latched): the state, EXPLORING or BACKING_UP
+        (``closed_loop.state_machine.State``), at start and on every transition (the controllers'
+        shared contract).
     Parameters:
         ``~trigger_distance`` (m, default 0.5): back up when the nearest obstacle ahead is closer.
         ``~explore_speed`` (m/s, default 0.5): forward speed while exploring.
@@ -42,13 +42,10 @@ class StateMachineController(FrontController):
 
     def setup(self):
         self._machine = BackUpStateMachine(self.settings, on_transition=self._on_transition)
-        self._state_pub = rospy.Publisher('~state', String, queue_size=1, latch=True)
-        self._state_pub.publish(String(data=self._machine.state.name))
+        self.publish_mode(self._machine.state, 'start')
 
     def react_now(self, reading, age_s):
-        # A new obstacle while exploring; a stale or bad scan is caught again inside decide().
-        return (self._machine.state is State.EXPLORING and reading is not None and reading.trusted
-                and reading.distance_m < self.settings.trigger_distance)
+        return react_now(self._machine.state, reading, self.settings)
 
     def decide(self, reading, age_s):
         problem = input_problem(reading, age_s, self.settings.scan_timeout)
@@ -62,9 +59,7 @@ class StateMachineController(FrontController):
 
     def _on_transition(self, old, new, now_s):
         # Called by the machine inside decide(), with the lock held.
-        rospy.loginfo('state %s -> %s at %.2f s (front obstacle %.2f m)', old.name, new.name,
-                      now_s, self.reading.distance_m)
-        self._state_pub.publish(String(data=new.name))
+        self.publish_mode(new, 'at %.2f s (front obstacle %.2f m)' % (now_s, self.reading.distance_m))
 
     def on_silence(self, silent_s):
         self.cmd_pub.publish(twist_from_command(STOP))

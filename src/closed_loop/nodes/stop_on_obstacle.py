@@ -1,8 +1,7 @@
 """stop_on_obstacle: the lesson's stop / slow / cruise controller, failing safe."""
 import rospy
-from std_msgs.msg import String
 
-from closed_loop.decisions import StopSettings, Zone, decide, stop
+from closed_loop.decisions import StopSettings, Zone, decide, react_now, stop
 from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist
 from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
@@ -26,7 +25,8 @@ class StopOnObstacle(FrontController):
         ``cmd_vel`` (geometry_msgs/Twist): forward speed only, every ``1 / ~rate_hz`` s of ROS
         time, at once on new danger (with ``~react_immediately``), zero from the watchdog and on
         shutdown.
-        ``~zone`` (std_msgs/String, latched): CLEAR, SLOW or STOP, on every change.
+        ``~mode`` (std_msgs/String, latched): the zone, CLEAR, SLOW or STOP
+        (``closed_loop.decisions.Zone``), on every change (the controllers' shared contract).
     Parameters:
         ``~stop_distance`` (m, default 0.5): stop when the nearest obstacle ahead is closer.
         ``~slow_distance`` (m, default 1.0): slow down when it is closer.
@@ -43,29 +43,21 @@ class StopOnObstacle(FrontController):
     def __init__(self):
         FrontController.__init__(self, load_settings(StopSettings))
 
-    def setup(self):
-        self._zone = None  # the zone last published; None before the first decision
-        self._zone_pub = rospy.Publisher('~zone', String, queue_size=1, latch=True)
-
     def react_now(self, reading, age_s):
-        """True for the first scan after start-up and, with ``~react_immediately``, for new danger.
+        """:func:`closed_loop.decisions.react_now`: the first decision, and new danger unless
+        ``~react_immediately`` is false.
 
-        The first decision (no zone published yet) is made at once whatever ``~react_immediately``
+        The first decision (no mode published yet) is made at once whatever ``~react_immediately``
         says: it is not a reaction to a change but the end of start-up, before which this node has
         sent no command at all; deciding at once only makes the first command (a stop, if the scan
         says so) come up to one timer period sooner, from a fresh scan. It happens once per node
         start (the watchdog's stop also counts as a decision), so reaction latencies measured
         after the node's first command are those of the timer-only design.
         """
-        previous = self._zone
-        if previous is None:
-            return True
-        if not self.settings.react_immediately:
-            return False
-        return decide(reading, age_s, previous, self.settings).zone > previous
+        return react_now(reading, age_s, self.mode, self.settings)
 
     def decide(self, reading, age_s):
-        self._publish(decide(reading, age_s, self._zone, self.settings))
+        self._publish(decide(reading, age_s, self.mode, self.settings))
 
     def on_silence(self, silent_s):
         self._publish(stop('no scan received for %.2f s of wall time (scan_timeout %.2f s)'
@@ -74,11 +66,7 @@ class StopOnObstacle(FrontController):
     def _publish(self, decision):
         """Publish ``decision`` (call with the lock held)."""
         self.cmd_pub.publish(twist(decision.linear_x, 0.0))
-        if decision.zone != self._zone:
-            rospy.loginfo('zone %s -> %s: %s', self._zone.name if self._zone is not None else '-',
-                          decision.zone.name, decision.reason)
-            self._zone = decision.zone
-            self._zone_pub.publish(String(data=decision.zone.name))
+        self.publish_mode(decision.zone, decision.reason)
         if decision.zone == Zone.STOP:
             rospy.logwarn_throttle(LOG_PERIOD_S, 'stopped: %s', decision.reason)
 
