@@ -97,6 +97,15 @@ class Monitor:
                 self.rest_since = time.monotonic()
 
 
+def live_robot_model():
+    """The robot as the running graph has it: robot_description and the simulator's frame names."""
+    import rospy
+    from closed_loop.settings import from_params
+    from closed_loop.simulation import SimSettings
+    settings = from_params(SimSettings, lambda name, default: rospy.get_param('/sim/' + name[1:], default))
+    return robot_model.load_robot_model(rospy.get_param('/robot_description'), settings.names)
+
+
 def launch_failure_lines(log_path, most=8):
     """The lines of the launch log that say why it ended: FATAL and ERROR lines, and roslaunch's word that a
     required process died (roslaunch itself then exits 0, as ROS 1 does)."""
@@ -119,6 +128,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--world', default='wall')
     parser.add_argument('--controller', default='stop_on_obstacle')
+    parser.add_argument('--robot', default='closed_loop', help='robot profile (config/robots/)')
     parser.add_argument('--seconds', type=float, default=30.0, help='wall-clock bound of the run')
     parser.add_argument('launch_args', nargs='*', help='extra roslaunch args (name:=value)')
     args = parser.parse_args()
@@ -127,7 +137,7 @@ def main():
     world = world_mod.load_world(world_mod.resolve_world(args.world, os.path.join(ROOT, 'worlds')))
     log_path = os.path.join(ROOT, 'test_output', 'demo.log')
     os.makedirs(os.path.dirname(log_path), exist_ok=True)
-    cmd = ['roslaunch', 'closed_loop', 'demo.launch', 'world:=' + args.world,
+    cmd = ['roslaunch', 'closed_loop', 'demo.launch', 'world:=' + args.world, 'robot:=' + args.robot,
            'controller:=' + args.controller] + args.launch_args
     print('demo: %s   (full log: %s)' % (' '.join(cmd), log_path), flush=True)
     log = open(log_path, 'w')
@@ -174,8 +184,14 @@ def main():
                 return 1
             p = truth.pose.pose.position
             start = world.robot_start
-            clearance, nearest = clearance_to_obstacles(world, p.x, p.y)
-            print('\nWhat the robot did (ground truth, world "%s", controller %s):' % (world.name, args.controller))
+            model = live_robot_model()
+            q = truth.pose.pose.orientation
+            yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+            lidar_x = p.x + math.cos(yaw) * model.scan_pose.x - math.sin(yaw) * model.scan_pose.y
+            lidar_y = p.y + math.sin(yaw) * model.scan_pose.x + math.cos(yaw) * model.scan_pose.y
+            clearance, nearest = clearance_to_obstacles(world, lidar_x, lidar_y)
+            print('\nWhat the robot did (ground truth, world "%s", robot %s, controller %s):'
+                  % (world.name, args.robot, args.controller))
             for t, zone, x, y in mon.zone_changes:
                 print('  t=%5.1fs  %-12s at x=%.2f y=%.2f m' % (t, zone, x, y))
             print('  drove %.2f m: from (%.2f, %.2f) to (%.2f, %.2f); %s'
@@ -183,8 +199,7 @@ def main():
                      'at rest' if mon.rest_since is not None else 'still moving'))
             if nearest is not None:
                 print('  LIDAR clearance to the nearest obstacle (%s): %.3f m; body front: about %.3f m'
-                      % (nearest, clearance, clearance - robot_model.load_robot_model(
-                          robot_model.default_urdf_path()).scan_to_front_m))
+                      % (nearest, clearance, clearance - model.scan_to_front_m))
             print('  contacts: %s' % ('none' if mon.contacts == 0 else '%d (the robot touched something)'
                                       % mon.contacts))
             return 0 if mon.contacts == 0 else 1

@@ -1,6 +1,8 @@
-"""What the simulator needs to know about the robot, read from its URDF (the single source of truth).
+"""What the simulator, the guard and the tools need to know about the robot, read from its URDF.
 
-The URDF names the frames and gives the wheel geometry; nothing here restates a dimension.
+The URDF (on ``robot_description``) is the single source of the robot's geometry: wheel radius and
+separation, the footprint rectangle, where the LIDAR and camera sit. A robot profile names which of its
+frames and joints play which part (:class:`RobotNames`); nothing here restates a dimension.
 """
 import math
 import os
@@ -9,84 +11,115 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: The default robot's names (urdf/closed_loop.urdf). A robot profile (config/robots/<name>.yaml) names its own
+#: frames and joints through the simulator's parameters; these are only the defaults of those parameters.
 LEFT_WHEEL_JOINT = 'wheel_left_joint'
 RIGHT_WHEEL_JOINT = 'wheel_right_joint'
 BASE_FRAME = 'base_footprint'
+BODY_LINK = 'base_link'
 SCAN_FRAME = 'base_scan'
 CAMERA_FRAME = 'camera_link'
 CAMERA_OPTICAL_FRAME = 'camera_optical_frame'
 
 
 class RobotModelError(ValueError):
-    """The URDF lacks something the simulator relies on; the message names the file and element."""
+    """The URDF lacks something the simulator relies on; the message names the source and element."""
+
+
+@dataclass(frozen=True)
+class RobotNames:
+    """Which URDF frames and joints play which part; a robot profile sets them (simulator parameters).
+
+    ``camera_frame`` empty: the robot has no camera. Each side may have several wheel joints (a skid-steer
+    base like the Jackal); they turn together.
+    """
+    base_frame: str = BASE_FRAME
+    body_link: str = BODY_LINK
+    scan_frame: str = SCAN_FRAME
+    camera_frame: str = CAMERA_FRAME
+    camera_optical_frame: str = CAMERA_OPTICAL_FRAME
+    left_wheel_joints: tuple = (LEFT_WHEEL_JOINT,)
+    right_wheel_joints: tuple = (RIGHT_WHEEL_JOINT,)
 
 
 @dataclass(frozen=True)
 class RobotModel:
-    urdf_path: str
+    urdf_text: str
+    source: str
+    names: RobotNames
     wheel_radius_m: float
-    wheel_separation_m: float   # distance between the wheel contact points, along y
-    scan_to_front_m: float      # along x, from the LIDAR axis to the front face of base_link's body box
+    wheel_separation_m: float   # distance between the left and right wheel contact lines, along y
+    footprint: 'Footprint'      # the rectangle around the collision shapes, in the base frame
+    scan_pose: 'Pose2DInBase'   # the LIDAR frame in the base frame
+
+    @property
+    def scan_to_front_m(self):
+        """Along x, from the LIDAR axis to the front of the footprint."""
+        return self.footprint.x_max - self.scan_pose.x
+
+    @property
+    def has_camera(self):
+        return bool(self.names.camera_frame)
 
 
 def default_urdf_path():
-    """The package's robot description, ``urdf/robot.urdf``."""
+    """The package's default robot description, ``urdf/closed_loop.urdf``."""
     here = os.path.dirname(os.path.abspath(__file__))
-    return os.path.normpath(os.path.join(here, '..', '..', 'urdf', 'robot.urdf'))
+    return os.path.normpath(os.path.join(here, '..', '..', 'urdf', 'closed_loop.urdf'))
 
 
-def load_robot_model(urdf_path):
-    """Read wheel radius and separation from the URDF's wheel joints and their links' cylinders."""
+def read_urdf(path):
+    """The text of the URDF file at ``path``."""
     try:
-        root = ET.parse(urdf_path).getroot()
-    except (OSError, ET.ParseError) as error:
-        raise RobotModelError('%s: cannot read the robot description: %s' % (urdf_path, error))
+        with open(path) as stream:
+            return stream.read()
+    except OSError as error:
+        raise RobotModelError('%s: cannot read the robot description: %s' % (path, error.strerror or error))
+
+
+def load_robot_model(urdf, names=RobotNames(), source=None):
+    """Read the drive geometry, footprint and LIDAR pose from a URDF (its text, or a file path).
+
+    Wheel radius from the wheel links' collision cylinders (all equal); wheel separation from the joint
+    origins (the mean y of the left wheels minus that of the right ones). Frames named in ``names`` must
+    exist (the camera's only if ``names.camera_frame`` is not empty).
+    """
+    if not urdf.lstrip().startswith('<'):
+        source = source or urdf
+        urdf = read_urdf(urdf)
+    source = source or 'robot_description'
+    root, poses = link_transforms(urdf, names.base_frame, source)
     joints = {j.get('name'): j for j in root.findall('joint')}
     links = {k.get('name'): k for k in root.findall('link')}
-    frames = set(links)
-    for name in (BASE_FRAME, SCAN_FRAME, CAMERA_FRAME, CAMERA_OPTICAL_FRAME):
-        if name not in frames:
-            raise RobotModelError('%s: link %r is missing' % (urdf_path, name))
-    ys = []
+    wanted = [names.base_frame, names.body_link, names.scan_frame]
+    if names.camera_frame:
+        wanted += [names.camera_frame, names.camera_optical_frame]
+    for name in wanted:
+        if name not in links:
+            raise RobotModelError('%s: link %r is missing' % (source, name))
+    ys = {'left': [], 'right': []}
     radii = []
-    for name in (LEFT_WHEEL_JOINT, RIGHT_WHEEL_JOINT):
-        joint = joints.get(name)
-        if joint is None:
-            raise RobotModelError('%s: joint %r is missing' % (urdf_path, name))
-        origin = joint.find('origin')
-        xyz = [float(v) for v in origin.get('xyz', '0 0 0').split()] if origin is not None else [0, 0, 0]
-        ys.append(xyz[1])
-        child = links.get(joint.find('child').get('link'))
-        cylinder = child.find('collision/geometry/cylinder') if child is not None else None
-        if cylinder is None:
-            raise RobotModelError('%s: joint %r: its child link needs a cylinder collision' % (urdf_path, name))
-        radii.append(float(cylinder.get('radius')))
-    if abs(radii[0] - radii[1]) > 1e-9:
-        raise RobotModelError('%s: the wheels have different radii %s' % (urdf_path, radii))
-    separation = abs(ys[0] - ys[1])
+    for side, joint_names in (('left', names.left_wheel_joints), ('right', names.right_wheel_joints)):
+        if not joint_names:
+            raise RobotModelError('%s: no %s wheel joint named' % (source, side))
+        for name in joint_names:
+            joint = joints.get(name)
+            if joint is None:
+                raise RobotModelError('%s: joint %r is missing' % (source, name))
+            child_name = joint.find('child').get('link')
+            ys[side].append(float(poses[child_name][1, 3]))
+            cylinder = links[child_name].find('collision/geometry/cylinder')
+            if cylinder is None:
+                raise RobotModelError('%s: joint %r: its child link needs a cylinder collision' % (source, name))
+            radii.append(float(cylinder.get('radius')))
+    if max(radii) - min(radii) > 1e-9:
+        raise RobotModelError('%s: the wheels have different radii %s' % (source, radii))
+    separation = sum(ys['left']) / len(ys['left']) - sum(ys['right']) / len(ys['right'])
     if separation <= 0:
-        raise RobotModelError('%s: the wheels are not apart along y' % urdf_path)
-    return RobotModel(urdf_path=urdf_path, wheel_radius_m=radii[0], wheel_separation_m=separation,
-                      scan_to_front_m=_body_front_x(urdf_path, links) - _joint_x(urdf_path, joints, 'scan_joint'))
-
-
-def _joint_x(urdf_path, joints, name):
-    joint = joints.get(name)
-    if joint is None:
-        raise RobotModelError('%s: joint %r is missing' % (urdf_path, name))
-    origin = joint.find('origin')
-    return float(origin.get('xyz', '0 0 0').split()[0]) if origin is not None else 0.0
-
-
-def _body_front_x(urdf_path, links):
-    """x of the front face of base_link's box collision (base_link's x equals base_footprint's)."""
-    for collision in links['base_link'].findall('collision'):
-        box = collision.find('geometry/box')
-        if box is not None:
-            origin = collision.find('origin')
-            x = float(origin.get('xyz', '0 0 0').split()[0]) if origin is not None else 0.0
-            return x + 0.5 * float(box.get('size').split()[0])
-    raise RobotModelError('%s: base_link needs a box collision (the body)' % urdf_path)
+        raise RobotModelError('%s: the left wheels are not to the left (+y) of the right ones' % source)
+    return RobotModel(urdf_text=urdf, source=source, names=names, wheel_radius_m=radii[0],
+                      wheel_separation_m=separation, footprint=footprint(urdf, source, names.base_frame),
+                      scan_pose=frame_pose_2d(urdf, names.scan_frame, source, names.base_frame))
 
 
 # --- planar geometry from the URDF text (robot_description) --------------------------------------------
@@ -175,12 +208,12 @@ def _shape_corners(geometry):
     return None
 
 
-def footprint(urdf_text, source='robot_description'):
+def footprint(urdf_text, source='robot_description', base_frame=BASE_FRAME):
     """The :class:`Footprint` around every ``<collision>`` box, cylinder and sphere of the robot.
 
     Meshes have no size here and are refused; a robot with no collision shape is refused too.
     """
-    robot, poses = link_transforms(urdf_text, source=source)
+    robot, poses = link_transforms(urdf_text, base_frame, source)
     points = []
     for link in robot.findall('link'):
         pose = poses.get(link.get('name'))
@@ -195,15 +228,15 @@ def footprint(urdf_text, source='robot_description'):
             m = pose @ _origin_matrix(collision)
             points.append(corners @ m[:3, :3].T + m[:3, 3])
     if not points:
-        raise RobotModelError('%s: no collision shapes under %r' % (source, BASE_FRAME))
+        raise RobotModelError('%s: no collision shapes under %r' % (source, base_frame))
     xy = np.vstack(points)[:, :2]
     return Footprint(float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 
-def frame_pose_2d(urdf_text, frame, source='robot_description'):
-    """The planar pose (x, y, yaw) of ``frame`` in base_footprint."""
-    _robot, poses = link_transforms(urdf_text, source=source)
+def frame_pose_2d(urdf_text, frame, source='robot_description', base_frame=BASE_FRAME):
+    """The planar pose (x, y, yaw) of ``frame`` in the base frame."""
+    _robot, poses = link_transforms(urdf_text, base_frame, source)
     if frame not in poses:
-        raise RobotModelError('%s: link %r is missing or not below %r' % (source, frame, BASE_FRAME))
+        raise RobotModelError('%s: link %r is missing or not below %r' % (source, frame, base_frame))
     m = poses[frame]
     return Pose2DInBase(float(m[0, 3]), float(m[1, 3]), math.atan2(m[1, 0], m[0, 0]))

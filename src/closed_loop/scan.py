@@ -198,11 +198,15 @@ class DetectorSettings:
                                  minimum=0.0, exclusive_minimum=True)
 
 
-def sector_readings(scan, settings):
-    """The front, left and right :class:`SectorReading` of ``scan``, keyed by sector name."""
+def sector_readings(scan, settings, forward_rad=0.0):
+    """The front, left and right :class:`SectorReading` of ``scan``, keyed by sector name.
+
+    ``forward_rad``: the robot's forward direction in the scan's frame (0 for a laser mounted facing
+    forward; minus the laser's yaw on the robot otherwise); the sectors turn with it.
+    """
     half_widths = {'front': settings.front_half_angle, 'left': settings.side_half_angle,
                    'right': settings.side_half_angle}
-    return {name: sector_min(scan, centre, half_widths[name])
+    return {name: sector_min(scan, forward_rad + centre, half_widths[name])
             for name, centre in SECTOR_CENTRES_RAD.items()}
 
 

@@ -7,6 +7,7 @@ Conventions (REP 103): metres, seconds of simulated time, radians, x forward, z 
 the ground truth frame; odometry starts at the robot's start pose.
 """
 import math
+import tempfile
 from dataclasses import dataclass
 
 import numpy as np
@@ -80,6 +81,29 @@ class SimSettings:
     camera_fov: float = param(1.085, 'rad', 'horizontal field of view', minimum=0.1, maximum=3.0)
     camera_near: float = param(0.02, 'm', 'nearest rendered distance', minimum=0.001)
     camera_far: float = param(30.0, 'm', 'farthest rendered distance', minimum=0.1)
+    wheel_separation_multiplier: float = param(1.0, '', "effective track / the wheels' geometric track, as "
+                                               "diff_drive_controller has it (skid-steer bases slip: more than 1)",
+                                               minimum=0.5, maximum=5.0)
+    wheel_sideways_friction: float = param(1.0, '', "a wheel's friction along its axle, as a fraction of its "
+                                           'friction when rolling (tyres slide sideways more easily; a skid-steer '
+                                           'base turns by it)', minimum=0.01, maximum=1.0)
+    # Which URDF frames and joints play which part; a robot profile (config/robots/<name>.yaml) sets them.
+    base_frame: str = param(robot_model.BASE_FRAME, '', "the robot's root link on the ground (REP 105)")
+    body_link: str = param(robot_model.BODY_LINK, '', 'the link whose collision shapes slide (casters)')
+    scan_frame: str = param(robot_model.SCAN_FRAME, '', "the LIDAR's link; the scan's frame_id")
+    camera_frame: str = param(robot_model.CAMERA_FRAME, '', "the camera's link, looking along +x; empty: "
+                              'the robot has no camera')
+    camera_optical_frame: str = param(robot_model.CAMERA_OPTICAL_FRAME, '', "the images' frame_id (z forward)")
+    left_wheel_joints: str = param(robot_model.LEFT_WHEEL_JOINT, '', 'the left wheel joints, separated by '
+                                   'spaces (several: skid steer, driven together)')
+    right_wheel_joints: str = param(robot_model.RIGHT_WHEEL_JOINT, '', 'the right wheel joints')
+
+    @property
+    def names(self):
+        """The :class:`closed_loop.robot_model.RobotNames` these settings give."""
+        return robot_model.RobotNames(self.base_frame, self.body_link, self.scan_frame, self.camera_frame,
+                                      self.camera_optical_frame, tuple(self.left_wheel_joints.split()),
+                                      tuple(self.right_wheel_joints.split()))
 
     def check_together(self):
         from closed_loop.settings import SettingsError
@@ -158,10 +182,14 @@ class Simulation:
     validated by the caller, limited and ramped here, and braked to zero by the command watchdog.
     """
 
-    def __init__(self, world, settings, urdf_path=None):
+    def __init__(self, world, settings, urdf=None):
+        """``urdf``: the robot description, as URDF text or a file path (default: urdf/closed_loop.urdf)."""
         self.world = world
         self.settings = settings
-        self.model = robot_model.load_robot_model(urdf_path or robot_model.default_urdf_path())
+        self.model = robot_model.load_robot_model(urdf or robot_model.default_urdf_path(), settings.names)
+        self.has_camera = settings.camera and self.model.has_camera
+        # The track the kinematics use: the wheels' geometric one, times the multiplier (skid steer).
+        self.track_m = self.model.wheel_separation_m * settings.wheel_separation_multiplier
         self.dt_s = 1.0 / settings.physics_rate_hz
         self.layout = scan_layout(settings.scan_angle_min, settings.scan_angle_max, settings.scan_samples)
         self.intrinsics = camera_intrinsics(settings.camera_width, settings.camera_height, settings.camera_fov)
@@ -206,24 +234,33 @@ class Simulation:
                 points, cycle_m = world_mod.motion_path(obstacle)
                 self._movers[uid] = (obstacle, points, cycle_m)
         start = self.world.robot_start
-        self.robot_id = self._call(p.loadURDF, self.model.urdf_path,
-                                   basePosition=[start.x, start.y, SPAWN_CLEARANCE_M],
-                                   baseOrientation=yaw_quaternion(start.yaw),
-                                   flags=p.URDF_USE_INERTIA_FROM_FILE)
+        # pybullet reads URDF from a file only; the text (robot_description) is the source.
+        with tempfile.NamedTemporaryFile('w', suffix='.urdf', prefix='closed_loop-robot-') as urdf_file:
+            urdf_file.write(self.model.urdf_text)
+            urdf_file.flush()
+            self.robot_id = self._call(p.loadURDF, urdf_file.name,
+                                       basePosition=[start.x, start.y, SPAWN_CLEARANCE_M],
+                                       baseOrientation=yaw_quaternion(start.yaw),
+                                       flags=p.URDF_USE_INERTIA_FROM_FILE)
         self._links = {}
         self._joints = {}
         for index in range(self._call(p.getNumJoints, self.robot_id)):
             info = self._call(p.getJointInfo, self.robot_id, index)
             self._joints[info[1].decode()] = index
             self._links[info[12].decode()] = index
-        self._wheels = (self._joints[robot_model.LEFT_WHEEL_JOINT], self._joints[robot_model.RIGHT_WHEEL_JOINT])
+        names = self.model.names
+        self._left_wheels = [self._joints[j] for j in names.left_wheel_joints]
+        self._right_wheels = [self._joints[j] for j in names.right_wheel_joints]
+        self._wheels = self._left_wheels + self._right_wheels
         self._call(p.changeDynamics, self.robot_id, -1, mass=ROOT_LINK_MASS_KG,
                    localInertiaDiagonal=[ROOT_LINK_INERTIA_KGM2] * 3)
-        base_link = self._links['base_link']
+        base_link = self._links[names.body_link]
         self._call(p.changeDynamics, self.robot_id, base_link, lateralFriction=CASTER_LATERAL_FRICTION,
                    spinningFriction=0.0, rollingFriction=0.0)
         for wheel in self._wheels:
-            self._call(p.changeDynamics, self.robot_id, wheel, lateralFriction=WHEEL_LATERAL_FRICTION)
+            # Anisotropic friction is in the wheel link's frame, whose y is the axle in the package's URDFs.
+            self._call(p.changeDynamics, self.robot_id, wheel, lateralFriction=WHEEL_LATERAL_FRICTION,
+                       anisotropicFriction=[1.0, self.settings.wheel_sideways_friction, 1.0])
         # Joints other than the wheels must not carry pybullet's default velocity motors.
         self._drive_wheels(0.0, 0.0)
 
@@ -255,22 +292,22 @@ class Simulation:
         if (left_rps, right_rps) == self._wheel_targets:
             return  # the motors keep their targets; re-sending costs a call per step
         self._wheel_targets = (left_rps, right_rps)
-        self._call(pybullet.setJointMotorControlArray, self.robot_id, list(self._wheels), pybullet.VELOCITY_CONTROL,
-                   targetVelocities=[left_rps, right_rps],
-                   forces=[self.settings.wheel_max_torque] * 2)
+        self._call(pybullet.setJointMotorControlArray, self.robot_id, self._wheels, pybullet.VELOCITY_CONTROL,
+                   targetVelocities=[left_rps] * len(self._left_wheels) + [right_rps] * len(self._right_wheels),
+                   forces=[self.settings.wheel_max_torque] * len(self._wheels))
 
     def step(self):
         """Advance one physics step of ``dt_s`` seconds; returns the new simulated time."""
         s = self.settings
         target = drive.limit_twist(self.watchdog.target(self.time_s), s.max_linear_speed, s.max_angular_speed)
         self._twist = drive.ramp(self._twist, target, s.max_linear_accel, s.max_angular_accel, self.dt_s)
-        left, right = drive.wheel_speeds(self._twist, self.model.wheel_separation_m, self.model.wheel_radius_m)
+        left, right = drive.wheel_speeds(self._twist, self.track_m, self.model.wheel_radius_m)
         self._drive_wheels(left, right)
         self._move_obstacles(self.time_s + self.dt_s)
         self._call(pybullet.stepSimulation)
         self.time_s += self.dt_s
         wl, wr = self.wheel_velocities()
-        self.odometry.integrate(drive.body_twist(wl, wr, self.model.wheel_separation_m, self.model.wheel_radius_m),
+        self.odometry.integrate(drive.body_twist(wl, wr, self.track_m, self.model.wheel_radius_m),
                                 self.dt_s)
         return self.time_s
 
@@ -300,12 +337,19 @@ class Simulation:
 
     # -- state ------------------------------------------------------------------------------------------
     def wheel_velocities(self):
-        states = self._call(pybullet.getJointStates, self.robot_id, list(self._wheels))
-        return states[0][1], states[1][1]
+        """(left, right) wheel speeds (rad/s), each the mean over that side's wheels."""
+        states = self._call(pybullet.getJointStates, self.robot_id, self._wheels)
+        n = len(self._left_wheels)
+        left = [st[1] for st in states[:n]]
+        right = [st[1] for st in states[n:]]
+        return sum(left) / len(left), sum(right) / len(right)
 
-    def wheel_positions(self):
-        states = self._call(pybullet.getJointStates, self.robot_id, list(self._wheels))
-        return states[0][0], states[1][0]
+    def wheel_joint_states(self):
+        """(names, positions rad, velocities rad/s) of every wheel joint, left ones first."""
+        states = self._call(pybullet.getJointStates, self.robot_id, self._wheels)
+        names = self.model.names
+        return (list(names.left_wheel_joints + names.right_wheel_joints), [st[0] for st in states],
+                [st[1] for st in states])
 
     def ground_truth(self):
         """(pose of base_footprint in the world frame, (linear xyz, angular xyz) in the world frame)."""
@@ -332,7 +376,7 @@ class Simulation:
         A hit closer than ``range_min`` is reported as -inf (too close to measure); no return is +inf.
         """
         s = self.settings
-        pose = self.link_pose(robot_model.SCAN_FRAME)
+        pose = self.link_pose(self.model.names.scan_frame)
         rotation = np.array(self._call(pybullet.getMatrixFromQuaternion, pose.orientation)).reshape(3, 3)
         dirs = self._ray_dirs @ rotation.T
         origin = np.asarray(pose.position)
@@ -354,7 +398,7 @@ class Simulation:
     def render_camera(self):
         """An RGB image (height, width, 3) uint8 from camera_link, looking along its +x axis."""
         s = self.settings
-        pose = self.link_pose(robot_model.CAMERA_FRAME)
+        pose = self.link_pose(self.model.names.camera_frame)
         rotation = np.array(self._call(pybullet.getMatrixFromQuaternion, pose.orientation)).reshape(3, 3)
         eye = np.asarray(pose.position)
         view = self._call(pybullet.computeViewMatrix, eye.tolist(), (eye + rotation[:, 0]).tolist(),

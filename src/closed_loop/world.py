@@ -26,9 +26,11 @@ from typing import Optional, Tuple
 
 import yaml
 
-#: The robot as seen by the start-pose check: a disk of this radius (m) around base_footprint. The
-#: robot is about 0.30 m x 0.24 m, so its half-diagonal is 0.19 m; the rest is a safety margin.
+#: The robot as seen by the start-pose check when its footprint is not known (a world checked on its
+#: own): a disk of this radius (m) around base_footprint. With the robot's footprint (the simulator
+#: passes the rectangle from its URDF), the check is that rectangle grown by START_MARGIN_M.
 ROBOT_CLEARANCE_RADIUS_M = 0.25
+START_MARGIN_M = 0.05
 
 #: Limits checked before anything is built, so a wrong file (a log, a binary, a generated monster) is
 #: refused in moments rather than loaded for minutes: the largest world file (bytes) and the most
@@ -278,14 +280,16 @@ def _get(checker, data, key, field, default=_MISSING):
 
 # --- parsing -----------------------------------------------------------------------------------
 
-def parse_world(data, source='<string>'):
+def parse_world(data, source='<string>', footprint=None):
     """Validate an already-loaded YAML object and return a :class:`World`.
 
     ``source`` names the file in error messages. Raises :class:`WorldError` on the first problem:
     a wrong type, an unknown key, a non-finite number, a size, radius, height, thickness or speed
     that is not > 0, a bad colour, duplicate obstacle names, a wall of zero length, motion on a
-    wall, or a robot start pose whose clearance disk (``ROBOT_CLEARANCE_RADIUS_M``) overlaps an
-    obstacle's footprint (moving obstacles at their start position).
+    wall, or a robot start pose where the robot would overlap an obstacle's footprint (moving
+    obstacles at their start position): the robot is ``footprint`` (an object with x_min, x_max,
+    y_min, y_max in m, e.g. :class:`closed_loop.robot_model.Footprint`) grown by ``START_MARGIN_M``,
+    or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M``.
     """
     check = _Checker(source)
     top = check.mapping(data, '(top level)', _TOP_KEYS)
@@ -328,10 +332,16 @@ def parse_world(data, source='<string>'):
         obstacles.append(obstacle)
 
     for index, obstacle in enumerate(obstacles):
-        if disk_overlaps(obstacle, start.x, start.y, ROBOT_CLEARANCE_RADIUS_M):
+        if footprint is None and disk_overlaps(obstacle, start.x, start.y, ROBOT_CLEARANCE_RADIUS_M):
             check.fail('robot.start',
                        'a pose at least %g m (the robot clearance radius) from obstacles[%d] %r'
                        % (ROBOT_CLEARANCE_RADIUS_M, index, obstacle.name),
+                       {'x': start.x, 'y': start.y, 'yaw': start.yaw})
+        if footprint is not None and footprint_overlaps(obstacle, start, footprint, START_MARGIN_M):
+            check.fail('robot.start',
+                       'a pose where the robot (%.2f x %.2f m, plus %g m) is clear of obstacles[%d] %r'
+                       % (footprint.x_max - footprint.x_min, footprint.y_max - footprint.y_min,
+                          START_MARGIN_M, index, obstacle.name),
                        {'x': start.x, 'y': start.y, 'yaw': start.yaw})
 
     return World(name=name, description=description, source=source, ground_color=ground_color,
@@ -430,7 +440,7 @@ def _parse_motion(check, value, field, origin):
 
 # --- files and names ---------------------------------------------------------------------------
 
-def load_world(path):
+def load_world(path, footprint=None):
     """Read the world file at ``path`` and return a :class:`World` (``source`` is ``path``).
 
     A missing or unreadable file, one over ``MAX_WORLD_FILE_BYTES``, a YAML syntax error (with its
@@ -454,7 +464,7 @@ def load_world(path):
                          error.strerror or str(error)) from None
     except UnicodeDecodeError as error:
         raise WorldError(path, '(file)', 'UTF-8 text', str(error)) from None
-    return parse_world(_load_yaml(text, path), path)
+    return parse_world(_load_yaml(text, path), path, footprint)
 
 
 def available_worlds(worlds_dir):
@@ -509,6 +519,43 @@ def disk_overlaps(obstacle, x_m, y_m, radius_m):
     gap_x = max(abs(local_x) - half_x, 0.0)
     gap_y = max(abs(local_y) - half_y, 0.0)
     return math.hypot(gap_x, gap_y) < radius_m
+
+
+def _corners(cx, cy, yaw, x_min, x_max, y_min, y_max):
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [(cx + c * x - s * y, cy + s * x + c * y) for x, y in
+            ((x_min, y_min), (x_max, y_min), (x_max, y_max), (x_min, y_max))]
+
+
+def _separated(a, b):
+    """True if convex polygons ``a`` and ``b`` (corner lists) have a separating axis (an edge normal)."""
+    for poly in (a, b):
+        for i in range(len(poly)):
+            (x1, y1), (x2, y2) = poly[i], poly[(i + 1) % len(poly)]
+            nx, ny = y2 - y1, x1 - x2
+            pa = [nx * x + ny * y for x, y in a]
+            pb = [nx * x + ny * y for x, y in b]
+            if max(pa) <= min(pb) or max(pb) <= min(pa):
+                return True
+    return False
+
+
+def footprint_overlaps(obstacle, pose, footprint, margin_m=0.0):
+    """True if the robot's footprint rectangle at ``pose`` (a Pose2D), grown by ``margin_m``, overlaps the
+    obstacle's footprint at its time-0 position. Touching is not an overlap."""
+    x_min, x_max = footprint.x_min - margin_m, footprint.x_max + margin_m
+    y_min, y_max = footprint.y_min - margin_m, footprint.y_max + margin_m
+    cx, cy = obstacle.position[0], obstacle.position[1]
+    if obstacle.shape == 'cylinder':
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        dx, dy = cx - pose.x, cy - pose.y
+        lx, ly = c * dx + s * dy, -s * dx + c * dy
+        gap = math.hypot(max(x_min - lx, 0.0, lx - x_max), max(y_min - ly, 0.0, ly - y_max))
+        return gap < obstacle.radius
+    half_x, half_y = obstacle.size[0] / 2.0, obstacle.size[1] / 2.0
+    robot = _corners(pose.x, pose.y, pose.yaw, x_min, x_max, y_min, y_max)
+    box = _corners(cx, cy, obstacle.yaw, -half_x, half_x, -half_y, half_y)
+    return not _separated(robot, box)
 
 
 # The simulator asks for a moving obstacle's place every physics step; its path never changes.

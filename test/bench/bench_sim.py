@@ -175,7 +175,7 @@ def make_simulation():
         from closed_loop.settings import check
         settings = check(simulation.SimSettings(world=WORLD))
         loaded = world.load_world(world.resolve_world(WORLD, os.path.join(ROOT, 'worlds')))
-        sim = simulation.Simulation(loaded, settings, os.path.join(ROOT, 'urdf', 'robot.urdf'))
+        sim = simulation.Simulation(loaded, settings, os.path.join(ROOT, 'urdf', 'closed_loop.urdf'))
         for _ in range(CORE_WARMUP_STEPS):
             sim.step()
     return sim

@@ -15,7 +15,7 @@ from std_msgs.msg import Bool, UInt32
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
 
-WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/robot.urdf)
+WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/closed_loop.urdf)
 SLOW_DISTANCE_M = 1.0        # stop_on_obstacle defaults
 SLOW_SPEED_MPS = 0.2
 AT_REST_MPS = 0.01

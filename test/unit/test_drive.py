@@ -6,7 +6,7 @@ import pytest
 from closed_loop.drive import (STOPPED, BodyTwist, CommandError, CommandWatchdog, Odometry2D,
                                body_twist, limit_twist, ramp, validate_twist, wheel_speeds)
 
-# The robot's wheel geometry (urdf/robot.urdf); any positive values would do for the algebra.
+# The robot's wheel geometry (urdf/closed_loop.urdf); any positive values would do for the algebra.
 WHEEL_RADIUS_M = 0.05
 WHEEL_SEPARATION_M = 0.28
 

@@ -16,7 +16,7 @@ WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..',
 DEG = math.pi / 180.0
 FRONT = 180                 # index of the ray at angle 0 in the default 360-ray layout
 WALL_FACE_X_M = 3.0         # near face of front_wall in worlds/wall.yaml
-ROBOT_HALF_LENGTH_M = 0.15  # base_link's box in urdf/robot.urdf is 0.30 m long
+ROBOT_HALF_LENGTH_M = 0.15  # base_link's box in urdf/closed_loop.urdf is 0.30 m long
 # Tolerances: the ray test is exact to float32; physics and rendering are not.
 RAY_TOL_M = 1e-3
 PIXEL_TOL = 2.0
@@ -480,7 +480,7 @@ def test_camera_sees_no_red_where_there_is_none(make_sim):
 def test_robot_model_reads_its_dimensions_from_the_urdf():
     from closed_loop import robot_model
     model = robot_model.load_robot_model(robot_model.default_urdf_path())
-    # urdf/robot.urdf: wheels of radius 0.05 m at y = +-0.14 m; body box 0.30 m long, centred on the LIDAR.
+    # urdf/closed_loop.urdf: wheels of radius 0.05 m at y = +-0.14 m; body box 0.30 m long, centred on the LIDAR.
     assert model.wheel_radius_m == pytest.approx(0.05)
     assert model.wheel_separation_m == pytest.approx(0.28)
     assert model.scan_to_front_m == pytest.approx(0.15)

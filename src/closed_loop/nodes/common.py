@@ -6,6 +6,7 @@ import tempfile
 import rospkg
 import rospy
 
+from closed_loop import robot_model
 from closed_loop.settings import SettingsError, from_params
 
 #: rospy's screen format with the node's name added, so every line says which node it is from. Used
@@ -53,3 +54,30 @@ def load_settings(cls):
 def stamp_to_sec(stamp):
     """A ``rospy.Time`` (or ``genpy.Time``) as float seconds."""
     return stamp.secs + stamp.nsecs * 1e-9
+
+
+class LaserMounting:
+    """Where the robot's forward direction lies in each laser frame, from ``robot_description``.
+
+    :meth:`forward_rad` is minus the laser's yaw on the robot (its TF from the base frame, fixed by the
+    URDF), so "ahead" follows the robot whatever way the laser is mounted. Without a robot description,
+    or for a frame the URDF does not have, forward is 0 (the REP 103 convention), said once in the log.
+    """
+
+    def __init__(self, base_frame=robot_model.BASE_FRAME):
+        self._base_frame = base_frame
+        self._urdf = rospy.get_param('robot_description', None)
+        self._cache = {}
+
+    def forward_rad(self, frame_id):
+        if frame_id not in self._cache:
+            forward = 0.0
+            if isinstance(self._urdf, str) and self._urdf.strip():
+                try:
+                    forward = -robot_model.frame_pose_2d(self._urdf, frame_id, base_frame=self._base_frame).yaw
+                except robot_model.RobotModelError as error:
+                    rospy.logwarn('taking 0 rad as forward in frame %r: %s', frame_id, error)
+            else:
+                rospy.logwarn('no robot_description: taking 0 rad as forward in frame %r', frame_id)
+            self._cache[frame_id] = forward
+        return self._cache[frame_id]

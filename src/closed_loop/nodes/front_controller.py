@@ -9,6 +9,7 @@ from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
+from closed_loop.nodes.common import LaserMounting
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist_from_command
 from closed_loop.scan import ScanError, sector_min
 from closed_loop.sources import SourceCheck
@@ -29,7 +30,8 @@ class FrontController:
     simulator stops ``/clock`` and with it the ROS-clock timer. Zero is also sent on shutdown.
 
     Parameters every front controller has (``closed_loop.decisions.FrontControlSettings``):
-        ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around 0.
+        ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around the robot's
+        forward direction (angle 0 of the scan, unless the URDF mounts the laser turned).
         ``~rate_hz`` (Hz, default 10, at least 1): control timer rate; also the watchdog's rate
         (or twice per ``~scan_timeout``, if that is more often).
         ``~scan_timeout`` (s, default 0.5, at most 5): a scan older than this (ROS clock), or no scan
@@ -57,6 +59,8 @@ class FrontController:
         self._mode_pub = rospy.Publisher('~mode', String, queue_size=1, latch=True)
         self.setup()
         self._source = SourceCheck(rospy.resolve_name('scan'), settings.scan_frame)
+        # "Ahead" is the robot's forward direction in the laser's frame, from how the URDF mounts it.
+        self._forward_rad = LaserMounting().forward_rad(settings.scan_frame)
         self._watchdog = SilenceWatchdog(settings.scan_timeout, settings.watchdog_period_s, self._on_silence)
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
         # reset=True: a ROS clock that jumps back (sim restart) restarts the timer instead of
@@ -105,7 +109,7 @@ class FrontController:
         else:
             try:
                 scan = scan_from_msg(msg)
-                reading = sector_min(scan, 0.0, self.settings.front_half_angle)
+                reading = sector_min(scan, self._forward_rad, self.settings.front_half_angle)
                 stamp_s = scan.stamp_s
             except ScanError as error:
                 rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)

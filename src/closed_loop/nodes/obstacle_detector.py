@@ -5,7 +5,7 @@ import rospy
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float32
 
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import LaserMounting, init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
 from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
@@ -44,6 +44,8 @@ class ObstacleDetector:
         self._sector_pubs = {name: rospy.Publisher('obstacle_distance/' + name, Float32,
                                                    queue_size=SCAN_QUEUE_SIZE)
                              for name in SECTOR_CENTRES_RAD}
+        # Sectors turn with the laser's mounting on the robot (robot_description), per scan frame.
+        self._mounting = LaserMounting()
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=SCAN_QUEUE_SIZE)
 
     def _on_scan(self, msg):
@@ -51,7 +53,7 @@ class ObstacleDetector:
         try:
             scan = scan_from_msg(msg)
             overall = nearest(scan)
-            sectors = sector_readings(scan, self._settings)
+            sectors = sector_readings(scan, self._settings, self._mounting.forward_rad(msg.header.frame_id))
         except ScanError as error:
             rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
             self._publish_all(math.nan, {name: math.nan for name in self._sector_pubs})

@@ -77,19 +77,25 @@ class SimNode:
 
     def __init__(self):
         self.settings = load_settings(SimSettings)
+        urdf = rospy.get_param('robot_description', None)
+        if not isinstance(urdf, str) or not urdf.strip():
+            urdf = os.path.join(package_path(), 'urdf', 'closed_loop.urdf')
+            rospy.logwarn('sim_node: no robot_description on the parameter server; using %s', urdf)
         try:
-            path = world_mod.resolve_world(self.settings.world, os.path.join(package_path(), 'worlds'))
-            world = world_mod.load_world(path)
-        except world_mod.WorldError as error:
-            rospy.logfatal('sim_node: cannot load the world: %s', error)
-            sys.exit(1)
-        try:
-            self.sim = Simulation(world, self.settings, os.path.join(package_path(), 'urdf', 'robot.urdf'))
+            model = robot_model.load_robot_model(urdf, self.settings.names)
         except robot_model.RobotModelError as error:
             rospy.logfatal('sim_node: %s', error)
             sys.exit(1)
-        rospy.loginfo('sim_node: world %r from %s; real_time_factor %g; camera %s', world.name, path,
-                      self.settings.real_time_factor, 'on' if self.settings.camera else 'off')
+        try:
+            path = world_mod.resolve_world(self.settings.world, os.path.join(package_path(), 'worlds'))
+            # The start must be free for this robot's footprint, not a generic disc.
+            world = world_mod.load_world(path, model.footprint)
+        except world_mod.WorldError as error:
+            rospy.logfatal('sim_node: cannot load the world: %s', error)
+            sys.exit(1)
+        self.sim = Simulation(world, self.settings, urdf)
+        rospy.loginfo('sim_node: world %r from %s; robot %s; real_time_factor %g; camera %s', world.name, path,
+                      self.sim.model.source, self.settings.real_time_factor, 'on' if self.sim.has_camera else 'off')
         self._lock = threading.Lock()
         self._pending_command = None
         self._requests = []
@@ -103,7 +109,9 @@ class SimNode:
         self.tf_pub = rospy.Publisher('/tf', TFMessage, queue_size=20)
         self.contact_pub = rospy.Publisher('contact', String, queue_size=10)
         self.contact_count_pub = rospy.Publisher('contact_count', UInt32, queue_size=1, latch=True)
-        if self.settings.camera:
+        if self.settings.camera and not self.sim.has_camera:
+            rospy.loginfo('sim_node: the robot has no camera (~camera_frame is empty); no images')
+        if self.sim.has_camera:
             self.image_pub = rospy.Publisher('camera/image_raw', Image, queue_size=2)
             self.info_pub = rospy.Publisher('camera/camera_info', CameraInfo, queue_size=2)
         self._cmd_source = SourceCheck(rospy.resolve_name('cmd_vel'))
@@ -171,6 +179,7 @@ class SimNode:
         next_joints = 0.0
         camera_period = 1.0 / s.camera_rate_hz
         half_step = 0.5 * sim.dt_s
+        camera = sim.has_camera
         next_scan = 0.0
         next_odom = 0.0
         # Render half a period after the scans, so a frame never delays the scan that follows it.
@@ -186,7 +195,7 @@ class SimNode:
                 wall_ref, sim_ref = time.monotonic(), sim.time_s
                 continue
             t = sim.step()
-            sensing = t >= next_scan - half_step or (s.camera and t >= next_camera - half_step)
+            sensing = t >= next_scan - half_step or (camera and t >= next_camera - half_step)
             now_wall = time.monotonic()
             if sensing or now_wall - last_clock_wall >= clock_min_wall_s:
                 # Every node on simulated time pays for each /clock message; faster than real time,
@@ -206,7 +215,7 @@ class SimNode:
             if t >= next_scan - half_step:
                 next_scan += scan_period
                 self._publish_scan(t, sim.scan())
-            if s.camera and t >= next_camera - half_step:
+            if camera and t >= next_camera - half_step:
                 next_camera += camera_period
                 # Like a lazy camera driver: no subscriber, no rendering.
                 if self.image_pub.get_num_connections() + self.info_pub.get_num_connections() > 0:
@@ -242,16 +251,14 @@ class SimNode:
         if self.joint_pub.get_num_connections() > 0:
             joints = JointState()
             joints.header.stamp = stamp
-            joints.name = [robot_model.LEFT_WHEEL_JOINT, robot_model.RIGHT_WHEEL_JOINT]
-            joints.position = list(sim.wheel_positions())
-            joints.velocity = list(sim.wheel_velocities())
+            joints.name, joints.position, joints.velocity = sim.wheel_joint_states()
             self.joint_pub.publish(joints)
 
     def _publish_odometry(self, stamp, odo):
         odom = Odometry()
         odom.header.stamp = stamp
         odom.header.frame_id = ODOM_FRAME
-        odom.child_frame_id = robot_model.BASE_FRAME
+        odom.child_frame_id = self.settings.base_frame
         odom.pose.pose.position.x, odom.pose.pose.position.y = odo.x, odo.y
         odom.pose.pose.orientation = _quaternion_yaw(odo.yaw)
         odom.twist.twist.linear.x = odo.twist.linear_x
@@ -264,7 +271,7 @@ class SimNode:
         tf = TransformStamped()
         tf.header.stamp = stamp
         tf.header.frame_id = ODOM_FRAME
-        tf.child_frame_id = robot_model.BASE_FRAME
+        tf.child_frame_id = self.settings.base_frame
         tf.transform.translation.x, tf.transform.translation.y = odo.x, odo.y
         tf.transform.rotation = odom.pose.pose.orientation
         self.tf_pub.publish(TFMessage([tf]))
@@ -274,7 +281,7 @@ class SimNode:
         truth = Odometry()
         truth.header.stamp = stamp
         truth.header.frame_id = WORLD_FRAME
-        truth.child_frame_id = robot_model.BASE_FRAME
+        truth.child_frame_id = self.settings.base_frame
         p = truth.pose.pose
         p.position.x, p.position.y, p.position.z = pose.position
         p.orientation = Quaternion(*pose.orientation)
@@ -291,7 +298,7 @@ class SimNode:
         layout = self.sim.layout
         msg = LaserScan()
         msg.header.stamp = _stamp(t)
-        msg.header.frame_id = robot_model.SCAN_FRAME
+        msg.header.frame_id = self.settings.scan_frame
         msg.angle_min = layout.angle_min
         msg.angle_max = layout.angle_max
         msg.angle_increment = layout.angle_increment
@@ -308,7 +315,7 @@ class SimNode:
         height, width, step, data = image_encoding.array_to_image(rgb, 'rgb8')
         image = Image(height=height, width=width, encoding='rgb8', is_bigendian=0, step=step, data=data)
         image.header.stamp = stamp
-        image.header.frame_id = robot_model.CAMERA_OPTICAL_FRAME
+        image.header.frame_id = self.settings.camera_optical_frame
         self.image_pub.publish(image)
         k = self.sim.intrinsics
         info = CameraInfo()
