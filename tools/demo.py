@@ -17,7 +17,8 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import netenv, robot_model, world as world_mod  # noqa: E402
+from closed_loop import netenv, robot_model, shapes, world as world_mod  # noqa: E402
+from closed_loop.geometry import quaternion_yaw  # noqa: E402
 
 STATUS_PERIOD_S = 1.0
 AT_REST_MPS = 0.01
@@ -28,19 +29,7 @@ MASTER_WAIT_S = 30.0
 
 def clearance_to_obstacles(world, x, y):
     """Smallest ground-plane distance (m) from point (x, y) to any obstacle's footprint, and its name."""
-    best = (math.inf, None)
-    for ob in world.obstacles:
-        if ob.shape == 'cylinder':
-            d = math.hypot(x - ob.position[0], y - ob.position[1]) - ob.radius
-        else:
-            c, s = math.cos(-ob.yaw), math.sin(-ob.yaw)
-            dx, dy = x - ob.position[0], y - ob.position[1]
-            lx, ly = c * dx - s * dy, s * dx + c * dy
-            qx, qy = abs(lx) - 0.5 * ob.size[0], abs(ly) - 0.5 * ob.size[1]
-            d = math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0)
-        if d < best[0]:
-            best = (d, ob.name)
-    return best
+    return min(((shapes.distance(ob, x, y), ob.name) for ob in world.obstacles), default=(math.inf, None))
 
 
 class Monitor:
@@ -186,7 +175,7 @@ def main():
             start = world.robot_start
             model = live_robot_model()
             q = truth.pose.pose.orientation
-            yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+            yaw = quaternion_yaw((q.x, q.y, q.z, q.w))
             lidar_x = p.x + math.cos(yaw) * model.scan_pose.x - math.sin(yaw) * model.scan_pose.y
             lidar_y = p.y + math.sin(yaw) * model.scan_pose.x + math.cos(yaw) * model.scan_pose.y
             clearance, nearest = clearance_to_obstacles(world, lidar_x, lidar_y)

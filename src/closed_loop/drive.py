@@ -4,25 +4,14 @@ Everything here is plain numbers in SI units (REP 103): linear speeds in m/s alo
 rad/s counter-clockwise about +z, times in seconds of simulated time.
 """
 import math
-from dataclasses import dataclass
 
-
-class CommandError(ValueError):
-    """A velocity command that must not move the robot; the message names the bad field."""
-
-
-@dataclass(frozen=True)
-class BodyTwist:
-    """Planar body velocity of a differential-drive robot."""
-    linear_x: float   # m/s
-    angular_z: float  # rad/s
-
-
-STOPPED = BodyTwist(0.0, 0.0)
+# One velocity-command type in the package: commands.VelocityCommand (linear_x m/s, angular_z rad/s,
+# finite by construction) is also the body twist the drive works with.
+from closed_loop.commands import STOP, CommandError, VelocityCommand
 
 
 def validate_twist(linear, angular):
-    """Check a Twist's six components, given as (x, y, z) tuples; return the usable :class:`BodyTwist`.
+    """Check a Twist's six components, given as (x, y, z) tuples; return the usable :class:`VelocityCommand`.
 
     Raises CommandError naming the first NaN or infinite component (``linear.x``, ``angular.z``, ...).
     Components a differential drive cannot follow (linear.y/z, angular.x/y) are checked for NaN/Inf too,
@@ -32,7 +21,7 @@ def validate_twist(linear, angular):
         for axis, value in zip('xyz', values):
             if not math.isfinite(value):
                 raise CommandError('%s.%s is %r; a velocity command must be finite' % (group, axis, value))
-    return BodyTwist(float(linear[0]), float(angular[2]))
+    return VelocityCommand(float(linear[0]), float(angular[2]))
 
 
 def clamp(value, limit):
@@ -54,7 +43,7 @@ def clipped_fields(twist, max_linear_mps, max_angular_rps):
 
 def limit_twist(target, max_linear_mps, max_angular_rps):
     """Clip a commanded twist to the robot's speed limits."""
-    return BodyTwist(clamp(target.linear_x, max_linear_mps), clamp(target.angular_z, max_angular_rps))
+    return VelocityCommand(clamp(target.linear_x, max_linear_mps), clamp(target.angular_z, max_angular_rps))
 
 
 def ramp(current, target, max_linear_accel_mps2, max_angular_accel_rps2, dt_s):
@@ -66,7 +55,7 @@ def ramp(current, target, max_linear_accel_mps2, max_angular_accel_rps2, dt_s):
         delta = goal - now
         room = rate * dt_s
         return goal if abs(delta) <= room else now + math.copysign(room, delta)
-    return BodyTwist(step(current.linear_x, target.linear_x, max_linear_accel_mps2),
+    return VelocityCommand(step(current.linear_x, target.linear_x, max_linear_accel_mps2),
                      step(current.angular_z, target.angular_z, max_angular_accel_rps2))
 
 
@@ -79,7 +68,7 @@ class CommandWatchdog:
 
     def __init__(self, timeout_s):
         self.timeout_s = timeout_s
-        self._command = STOPPED
+        self._command = STOP
         self._received_s = None
 
     def accept(self, command, now_s):
@@ -87,7 +76,7 @@ class CommandWatchdog:
         self._received_s = now_s
 
     def clear(self):
-        self._command = STOPPED
+        self._command = STOP
         self._received_s = None
 
     def expired(self, now_s):
@@ -97,7 +86,7 @@ class CommandWatchdog:
         return age < 0.0 or age > self.timeout_s
 
     def target(self, now_s):
-        return STOPPED if self.expired(now_s) else self._command
+        return STOP if self.expired(now_s) else self._command
 
 
 def wheel_speeds(twist, wheel_separation_m, wheel_radius_m):
@@ -108,7 +97,7 @@ def wheel_speeds(twist, wheel_separation_m, wheel_radius_m):
 
 def body_twist(left_rps, right_rps, wheel_separation_m, wheel_radius_m):
     """The body twist that wheel speeds (rad/s) produce, without slip."""
-    return BodyTwist(0.5 * wheel_radius_m * (left_rps + right_rps),
+    return VelocityCommand(0.5 * wheel_radius_m * (left_rps + right_rps),
                      wheel_radius_m * (right_rps - left_rps) / wheel_separation_m)
 
 
@@ -120,7 +109,7 @@ class Odometry2D:
 
     def reset(self):
         self.x = self.y = self.yaw = 0.0
-        self.twist = STOPPED
+        self.twist = STOP
 
     def integrate(self, twist, dt_s):
         """Advance by ``dt_s`` at constant ``twist`` (exact arc, so turning in place is exact too)."""

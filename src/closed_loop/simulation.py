@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet
 
-from closed_loop import drive, robot_model, world as world_mod
+from closed_loop import drive, robot_model, shapes, world as world_mod
+from closed_loop.geometry import quaternion_yaw, yaw_quaternion
 from closed_loop.settings import MIN_RATE_HZ, param
 
 GRAVITY_MPS2 = 9.81
@@ -167,12 +168,7 @@ class Pose3D:
 
     @property
     def yaw(self):
-        x, y, z, w = self.orientation
-        return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-
-
-def yaw_quaternion(yaw):
-    return (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
+        return quaternion_yaw(self.orientation)
 
 
 class Simulation:
@@ -201,7 +197,7 @@ class Simulation:
             raise RuntimeError('pybullet could not start (gui=%s)' % settings.gui)
         self.time_s = 0.0
         self._world_start_s = 0.0
-        self._twist = drive.STOPPED
+        self._twist = drive.STOP
         self._touching = set()
         self.contact_count = 0
         self._wheel_targets = None
@@ -265,17 +261,8 @@ class Simulation:
         self._drive_wheels(0.0, 0.0)
 
     def _add_obstacle(self, obstacle):
-        p = pybullet
-        if obstacle.shape == 'box':
-            half = [0.5 * s for s in obstacle.size]
-            shape = self._call(p.createCollisionShape, p.GEOM_BOX, halfExtents=half)
-            visual = self._call(p.createVisualShape, p.GEOM_BOX, halfExtents=half, rgbaColor=list(obstacle.color))
-        else:
-            shape = self._call(p.createCollisionShape, p.GEOM_CYLINDER, radius=obstacle.radius,
-                               height=obstacle.size[2])
-            visual = self._call(p.createVisualShape, p.GEOM_CYLINDER, radius=obstacle.radius,
-                                length=obstacle.size[2], rgbaColor=list(obstacle.color))
-        return self._call(p.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
+        shape, visual = shapes.SHAPES[obstacle.shape].pybullet_shapes(obstacle, self._call, pybullet)
+        return self._call(pybullet.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
                           baseOrientation=yaw_quaternion(obstacle.yaw))
 
     def _precompute_rays(self):
@@ -285,7 +272,7 @@ class Simulation:
 
     # -- commands and stepping ----------------------------------------------------------------------
     def command(self, twist):
-        """Follow a validated :class:`drive.BodyTwist` from now until the watchdog expires."""
+        """Follow a validated :class:`drive.VelocityCommand` from now until the watchdog expires."""
         self.watchdog.accept(twist, self.time_s)
 
     def _drive_wheels(self, left_rps, right_rps):
@@ -325,7 +312,7 @@ class Simulation:
         self._call(pybullet.resetBaseVelocity, self.robot_id, [0, 0, 0], [0, 0, 0])
         for joint in self._joints.values():
             self._call(pybullet.resetJointState, self.robot_id, joint, 0.0, 0.0)
-        self._twist = drive.STOPPED
+        self._twist = drive.STOP
         self._wheel_targets = None
         self._drive_wheels(0.0, 0.0)
         self.watchdog.clear()

@@ -26,6 +26,8 @@ from typing import Optional, Tuple
 
 import yaml
 
+from closed_loop import shapes
+
 #: The robot as seen by the start-pose check when its footprint is not known (a world checked on its
 #: own): a disk of this radius (m) around base_footprint. With the robot's footprint (the simulator
 #: passes the rectangle from its URDF), the check is that rectangle grown by START_MARGIN_M.
@@ -505,57 +507,18 @@ def disk_overlaps(obstacle, x_m, y_m, radius_m):
     """True if a disk (centre ``x_m``, ``y_m``, radius ``radius_m``, in m) overlaps the footprint.
 
     The footprint is the obstacle's shape seen from above at its time-0 position: a rotated
-    rectangle for a box, a disk for a cylinder. Height is ignored. Touching (distance exactly
-    equal to the radius) is not an overlap.
+    rectangle for a box, a disk for a cylinder (:mod:`closed_loop.shapes`). Height is ignored.
+    Touching (distance exactly equal to the radius) is not an overlap.
     """
-    cx, cy = obstacle.position[0], obstacle.position[1]
-    if obstacle.shape == 'cylinder':
-        return math.hypot(x_m - cx, y_m - cy) < radius_m + obstacle.radius
-    # Express the disk centre in the box frame, then find the nearest point of the rectangle.
-    c, s = math.cos(obstacle.yaw), math.sin(obstacle.yaw)
-    dx, dy = x_m - cx, y_m - cy
-    local_x, local_y = c * dx + s * dy, -s * dx + c * dy
-    half_x, half_y = obstacle.size[0] / 2.0, obstacle.size[1] / 2.0
-    gap_x = max(abs(local_x) - half_x, 0.0)
-    gap_y = max(abs(local_y) - half_y, 0.0)
-    return math.hypot(gap_x, gap_y) < radius_m
-
-
-def _corners(cx, cy, yaw, x_min, x_max, y_min, y_max):
-    c, s = math.cos(yaw), math.sin(yaw)
-    return [(cx + c * x - s * y, cy + s * x + c * y) for x, y in
-            ((x_min, y_min), (x_max, y_min), (x_max, y_max), (x_min, y_max))]
-
-
-def _separated(a, b):
-    """True if convex polygons ``a`` and ``b`` (corner lists) have a separating axis (an edge normal)."""
-    for poly in (a, b):
-        for i in range(len(poly)):
-            (x1, y1), (x2, y2) = poly[i], poly[(i + 1) % len(poly)]
-            nx, ny = y2 - y1, x1 - x2
-            pa = [nx * x + ny * y for x, y in a]
-            pb = [nx * x + ny * y for x, y in b]
-            if max(pa) <= min(pb) or max(pb) <= min(pa):
-                return True
-    return False
+    return shapes.distance(obstacle, x_m, y_m) < radius_m
 
 
 def footprint_overlaps(obstacle, pose, footprint, margin_m=0.0):
     """True if the robot's footprint rectangle at ``pose`` (a Pose2D), grown by ``margin_m``, overlaps the
     obstacle's footprint at its time-0 position. Touching is not an overlap."""
-    x_min, x_max = footprint.x_min - margin_m, footprint.x_max + margin_m
-    y_min, y_max = footprint.y_min - margin_m, footprint.y_max + margin_m
-    cx, cy = obstacle.position[0], obstacle.position[1]
-    if obstacle.shape == 'cylinder':
-        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
-        dx, dy = cx - pose.x, cy - pose.y
-        lx, ly = c * dx + s * dy, -s * dx + c * dy
-        gap = math.hypot(max(x_min - lx, 0.0, lx - x_max), max(y_min - ly, 0.0, ly - y_max))
-        return gap < obstacle.radius
-    half_x, half_y = obstacle.size[0] / 2.0, obstacle.size[1] / 2.0
-    robot = _corners(pose.x, pose.y, pose.yaw, x_min, x_max, y_min, y_max)
-    box = _corners(cx, cy, obstacle.yaw, -half_x, half_x, -half_y, half_y)
-    return not _separated(robot, box)
+    rect = (footprint.x_min - margin_m, footprint.x_max + margin_m,
+            footprint.y_min - margin_m, footprint.y_max + margin_m)
+    return shapes.SHAPES[obstacle.shape].overlaps_robot(obstacle, pose, rect)
 
 
 # The simulator asks for a moving obstacle's place every physics step; its path never changes.

@@ -136,7 +136,7 @@ def run_core_loop(sim, sim_seconds, camera):
     end = t + sim_seconds
     next_scan = next_odom = next_command = t
     next_camera = t + 0.5 * camera_period  # the node's half-period offset between scans and frames
-    turn = drive.BodyTwist(0.0, TURN_RATE_RPS)
+    turn = drive.VelocityCommand(0.0, TURN_RATE_RPS)
     clock = time.perf_counter
     wall0, cpu0 = clock(), time.process_time()
     while t < end - half_step:

@@ -56,10 +56,10 @@ def test_the_watchdog_looks_at_least_twice_per_timeout():
 
 
 def test_clipping_is_said_with_value_and_limit():
-    found = drive.clipped_fields(drive.BodyTwist(1e308, -4.0), 1.5, 3.0)
+    found = drive.clipped_fields(drive.VelocityCommand(1e308, -4.0), 1.5, 3.0)
     assert found == ['linear.x 1e+308 m/s clipped to the limit 1.5 m/s (~max_linear_speed)',
                      'angular.z -4 rad/s clipped to the limit -3 rad/s (~max_angular_speed)']
-    assert drive.clipped_fields(drive.BodyTwist(1.5, 3.0), 1.5, 3.0) == []
+    assert drive.clipped_fields(drive.VelocityCommand(1.5, 3.0), 1.5, 3.0) == []
 
 
 def test_footprint_of_a_turned_and_offset_box():

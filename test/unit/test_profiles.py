@@ -46,18 +46,18 @@ def test_each_robot_drives_straight_and_turns_in_the_core(name):
     urdf, settings = profile(name)
     sim = Simulation(load_world(os.path.join(ROOT, 'worlds', 'wall.yaml')), settings, urdf)
     try:
-        from closed_loop.drive import BodyTwist
+        from closed_loop.drive import VelocityCommand
         speed = min(0.2, settings.max_linear_speed)
         for i in range(int(2.0 / sim.dt_s)):
             if i % 10 == 0:
-                sim.command(BodyTwist(speed, 0.0))
+                sim.command(VelocityCommand(speed, 0.0))
             sim.step()
         pose, _ = sim.ground_truth()
         assert pose.position[0] == pytest.approx(speed * 2.0, abs=0.12)
         assert abs(pose.position[1]) < 0.05 and abs(pose.yaw) < 0.1
         for i in range(int(1.5 / sim.dt_s)):
             if i % 10 == 0:
-                sim.command(BodyTwist(0.0, 1.0))
+                sim.command(VelocityCommand(0.0, 1.0))
             sim.step()
         assert abs(sim.ground_truth()[0].yaw) > 0.5, 'did not turn'
         ranges = sim.scan()

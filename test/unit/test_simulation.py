@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from closed_loop import robot_model
-from closed_loop.drive import STOPPED, BodyTwist
+from closed_loop.drive import STOP, VelocityCommand
 from closed_loop.settings import SettingsError, check
 from closed_loop.simulation import SimSettings, Simulation, camera_intrinsics, scan_layout
 from closed_loop.world import load_world, moving_obstacle_xy, parse_world
@@ -270,7 +270,7 @@ DRIVE_SPEED_MPS = 0.5
 
 def test_driving_forward_moves_the_robot_and_odometry_agrees(make_sim):
     sim = make_sim(world('wall'))
-    run(sim, 1.0, BodyTwist(DRIVE_SPEED_MPS, 0.0))
+    run(sim, 1.0, VelocityCommand(DRIVE_SPEED_MPS, 0.0))
     pose = sim.ground_truth()[0]
     # 0.5 m/s for 1 s, less the 0.25 s ramp at 2 m/s^2 (0.0625 m): about 0.44 m.
     assert 0.42 < pose.position[0] < 0.5
@@ -278,15 +278,15 @@ def test_driving_forward_moves_the_robot_and_odometry_agrees(make_sim):
     assert abs(pose.yaw) < 0.02
     assert sim.odometry.x == pytest.approx(pose.position[0], abs=0.03)
     assert sim.odometry.y == pytest.approx(pose.position[1], abs=0.03)
-    assert sim.commanded_twist() == BodyTwist(DRIVE_SPEED_MPS, 0.0)
+    assert sim.commanded_twist() == VelocityCommand(DRIVE_SPEED_MPS, 0.0)
     wheel_rps = DRIVE_SPEED_MPS / sim.model.wheel_radius_m
     assert sim.wheel_velocities() == pytest.approx((wheel_rps, wheel_rps), rel=0.05)
 
 
 def test_the_robot_brakes_to_rest_when_commands_stop(make_sim):
     sim = make_sim(world('wall'))
-    run(sim, 1.0, BodyTwist(DRIVE_SPEED_MPS, 0.0))
-    sim.command(BodyTwist(DRIVE_SPEED_MPS, 0.0))
+    run(sim, 1.0, VelocityCommand(DRIVE_SPEED_MPS, 0.0))
+    sim.command(VelocityCommand(DRIVE_SPEED_MPS, 0.0))
     timeout_s = sim.settings.cmd_vel_timeout
     # Until the timeout the last command still holds.
     run(sim, timeout_s - 2 * sim.dt_s)
@@ -295,7 +295,7 @@ def test_the_robot_brakes_to_rest_when_commands_stop(make_sim):
     braking_s = DRIVE_SPEED_MPS / sim.settings.max_linear_accel
     settle_s = 0.1
     run(sim, 2 * sim.dt_s + braking_s + settle_s)
-    assert sim.commanded_twist() == STOPPED
+    assert sim.commanded_twist() == STOP
     assert max(abs(w) for w in sim.wheel_velocities()) < 0.05
     assert planar_speed(sim) < 0.01
     before = sim.ground_truth()[0].position
@@ -306,7 +306,7 @@ def test_the_robot_brakes_to_rest_when_commands_stop(make_sim):
 
 def test_turning_in_place_counter_clockwise(make_sim):
     sim = make_sim(world('empty'))
-    run(sim, 1.0, BodyTwist(0.0, 1.0))
+    run(sim, 1.0, VelocityCommand(0.0, 1.0))
     pose = sim.ground_truth()[0]
     # 1 rad/s for 1 s, less the ramp at 6 rad/s^2 (1/12 rad).
     assert pose.yaw == pytest.approx(1.0 - 1.0 / 12.0, abs=0.05)
@@ -319,8 +319,8 @@ def test_turning_in_place_counter_clockwise(make_sim):
 
 def test_commands_beyond_the_limits_are_clipped(make_sim):
     sim = make_sim(world('empty'), max_linear_speed=0.3)
-    run(sim, 1.0, BodyTwist(5.0, 0.0))
-    assert sim.commanded_twist() == BodyTwist(0.3, 0.0)
+    run(sim, 1.0, VelocityCommand(5.0, 0.0))
+    assert sim.commanded_twist() == VelocityCommand(0.3, 0.0)
     assert planar_speed(sim) == pytest.approx(0.3, abs=0.02)
 
 
@@ -330,7 +330,7 @@ def drive_until_contact(sim, limit_s=10.0):
     """Drive forward until ``new_contacts`` reports something; return (contacts, time)."""
     for i in range(steps_for(sim, limit_s)):
         if i % steps_for(sim, COMMAND_PERIOD_S) == 0:
-            sim.command(BodyTwist(DRIVE_SPEED_MPS, 0.0))
+            sim.command(VelocityCommand(DRIVE_SPEED_MPS, 0.0))
         sim.step()
         began = sim.new_contacts()
         if began:
@@ -358,11 +358,11 @@ def test_driving_into_the_wall_is_one_contact(make_sim):
     assert began == ['front_wall']
     x = sim.ground_truth()[0].position[0]
     assert x + ROBOT_HALF_LENGTH_M == pytest.approx(WALL_FACE_X_M, abs=0.02)
-    sim.command(STOPPED)
+    sim.command(STOP)
     assert contacts_over(sim, 1.0) == []
     assert sim.contact_count == 1
     # Back off and come again: a second contact.
-    assert contacts_over(sim, 1.0, BodyTwist(-0.3, 0.0)) == []
+    assert contacts_over(sim, 1.0, VelocityCommand(-0.3, 0.0)) == []
     assert sim.touching() == []
     began, _ = drive_until_contact(sim)
     assert began == ['front_wall']
@@ -372,14 +372,14 @@ def test_driving_into_the_wall_is_one_contact(make_sim):
 def test_pushing_against_the_wall_stays_one_contact(make_sim):
     sim = make_sim(world('wall'))
     drive_until_contact(sim)
-    assert contacts_over(sim, 1.0, BodyTwist(DRIVE_SPEED_MPS, 0.0)) == []
+    assert contacts_over(sim, 1.0, VelocityCommand(DRIVE_SPEED_MPS, 0.0)) == []
     assert sim.contact_count == 1
 
 
 def test_reset_after_a_contact_clears_the_count(make_sim):
     sim = make_sim(world('wall'))
     drive_until_contact(sim)
-    sim.command(BodyTwist(DRIVE_SPEED_MPS, 0.0))
+    sim.command(VelocityCommand(DRIVE_SPEED_MPS, 0.0))
     sim.reset_world()
     assert sim.contact_count == 0
     assert sim.touching() == []
@@ -391,17 +391,17 @@ def test_reset_after_a_contact_clears_the_count(make_sim):
 def test_reset_puts_the_robot_back_at_rest_at_its_start(make_sim):
     start = {'x': 0.5, 'y': -0.3, 'yaw': 0.6}
     sim = make_sim(parse_world({'name': 'offset_start', 'robot': {'start': start}}))
-    run(sim, 1.0, BodyTwist(DRIVE_SPEED_MPS, 0.8))
+    run(sim, 1.0, VelocityCommand(DRIVE_SPEED_MPS, 0.8))
     assert math.hypot(sim.odometry.x, sim.odometry.y) > 0.2
     # A command just before the reset must be forgotten, or the robot would drive off again.
-    sim.command(BodyTwist(DRIVE_SPEED_MPS, 0.8))
+    sim.command(VelocityCommand(DRIVE_SPEED_MPS, 0.8))
     sim.reset_world()
     assert (sim.odometry.x, sim.odometry.y, sim.odometry.yaw) == (0.0, 0.0, 0.0)
     run(sim, 0.3)
     pose = sim.ground_truth()[0]
     assert pose.position[:2] == pytest.approx((start['x'], start['y']), abs=0.01)
     assert pose.yaw == pytest.approx(start['yaw'], abs=0.01)
-    assert sim.commanded_twist() == STOPPED
+    assert sim.commanded_twist() == STOP
     assert max(abs(w) for w in sim.wheel_velocities()) < 0.05
     assert (sim.odometry.x, sim.odometry.y, sim.odometry.yaw) == pytest.approx((0.0, 0.0, 0.0), abs=1e-3)
 

@@ -16,6 +16,7 @@ from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 
 from closed_loop import drive, image_encoding, robot_model, world as world_mod
+from closed_loop.geometry import yaw_quaternion
 from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
 from closed_loop.simulation import SimSettings, Simulation
@@ -46,7 +47,7 @@ def _stamp(t_s):
 
 
 def _quaternion_yaw(yaw):
-    return Quaternion(0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw))
+    return Quaternion(*yaw_quaternion(yaw))
 
 
 class SimNode:
@@ -134,7 +135,7 @@ class SimNode:
                                          (msg.angular.x, msg.angular.y, msg.angular.z))
         except drive.CommandError as error:
             rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: rejected cmd_vel: %s; braking' % error)
-            twist = drive.STOPPED
+            twist = drive.STOP
         for clipped in drive.clipped_fields(twist, self.settings.max_linear_speed,
                                             self.settings.max_angular_speed):
             rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: cmd_vel from %s: %s'
