@@ -1,12 +1,13 @@
 """The simulation backend: a world and a differential-drive robot in pybullet, stepped at a fixed rate.
 
 One :class:`Simulation` owns one pybullet client; every pybullet call goes through it, from one thread.
-It knows nothing of ROS: the node hands it commands and reads scans, images, poses and contacts.
+It owns the world, the robot and ``step()``, and nothing else: the sensors (``closed_loop.sensors``)
+sample it through a few primitives (link poses, ray casts, rendering, contacts). It knows nothing of
+ROS: the node hands it commands and hands its sensors' readings to ROS.
 
 Conventions (REP 103): metres, seconds of simulated time, radians, x forward, z up. The world frame is
 the ground truth frame; odometry starts at the robot's start pose.
 """
-import math
 import tempfile
 from dataclasses import dataclass
 
@@ -15,7 +16,7 @@ import pybullet
 
 from closed_loop import drive, robot_model, shapes, world as world_mod
 from closed_loop.geometry import quaternion_yaw, yaw_quaternion
-from closed_loop.settings import MIN_RATE_HZ, param
+from closed_loop.settings import param
 
 GRAVITY_MPS2 = 9.81
 # Spawn the robot this far above the ground so no wheel starts inside it.
@@ -25,9 +26,6 @@ WHEEL_LATERAL_FRICTION = 1.0
 CASTER_LATERAL_FRICTION = 0.0
 # base_footprint has no inertial in the URDF (KDL rejects one on the root); pybullet would assume 1 kg.
 ROOT_LINK_MASS_KG = 0.001
-# A contact ends only when the robot is this far from the obstacle: pressing against a wall, pybullet's
-# contact list empties for a step now and then, which must not count as a new contact.
-CONTACT_RELEASE_M = 0.005
 # Constraint solver iterations per step. pybullet's default (50) is meant for stacks and grippers; a
 # wheeled base on flat ground drives the same with 20 (within 2 mm over 5 s in obstacle_course) at 70%
 # of the cost.
@@ -40,14 +38,8 @@ class SimSettings:
     """The simulator node's ``~parameters``; defaults here only."""
     world: str = param('wall', '', 'world name in worlds/ or a path to a world YAML file')
     gui: bool = param(False, '', "open pybullet's own window (needs a display)")
-    real_time_factor: float = param(1.0, '', 'simulated seconds per wall second; 0 = as fast as possible',
-                                    minimum=0.0)
     physics_rate_hz: float = param(100.0, 'Hz', 'physics steps per simulated second', minimum=10.0,
                                    maximum=2000.0)
-    max_clock_rate_hz: float = param(100.0, 'Hz', '/clock is published after a physics step at most this '
-                                     'often per wall second (every step at real time; throttled when '
-                                     'faster), and always before a scan or camera frame',
-                                     minimum=1.0)
     cmd_vel_timeout: float = param(0.5, 's', 'brake to zero when no command arrived for this long',
                                    minimum=0.0, maximum=5.0, exclusive_minimum=True)
     max_linear_speed: float = param(1.5, 'm/s', 'linear.x is clipped to +-this', minimum=0.0,
@@ -60,28 +52,6 @@ class SimSettings:
                                      exclusive_minimum=True)
     wheel_max_torque: float = param(2.0, 'N m', 'torque each wheel motor can apply', minimum=0.0,
                                     exclusive_minimum=True)
-    odom_rate_hz: float = param(50.0, 'Hz', '/odom, /base_pose_ground_truth and the odom TF',
-                                minimum=MIN_RATE_HZ)
-    joint_states_rate_hz: float = param(20.0, 'Hz', '/joint_states (the wheels, for robot_state_publisher '
-                                        'and rviz)', minimum=MIN_RATE_HZ)
-    scan_rate_hz: float = param(10.0, 'Hz', 'LIDAR scans per simulated second', minimum=MIN_RATE_HZ)
-    scan_samples: int = param(360, '', 'rays per scan', minimum=1, maximum=8192)
-    scan_angle_min: float = param(-math.pi, 'rad', 'angle of the first ray (0 = straight ahead)',
-                                  minimum=-2 * math.pi, maximum=2 * math.pi)
-    scan_angle_max: float = param(math.pi, 'rad', 'end of the sweep; a full turn is [min, min + 2 pi)',
-                                  minimum=-2 * math.pi, maximum=2 * math.pi)
-    range_min: float = param(0.12, 'm', 'closer returns are reported as -inf (REP 117)', minimum=0.0)
-    range_max: float = param(3.5, 'm', 'no return within this is +inf (REP 117)', minimum=0.0,
-                             exclusive_minimum=True)
-    scan_noise_stddev: float = param(0.0, 'm', 'Gaussian noise added to each finite range', minimum=0.0)
-    noise_seed: int = param(0, '', 'seed of the noise generator (same seed, same noise)', minimum=0)
-    camera: bool = param(True, '', 'render and publish the camera')
-    camera_rate_hz: float = param(10.0, 'Hz', 'camera frames per simulated second', minimum=MIN_RATE_HZ)
-    camera_width: int = param(320, 'px', 'image width', minimum=8, maximum=4096)
-    camera_height: int = param(240, 'px', 'image height', minimum=8, maximum=4096)
-    camera_fov: float = param(1.085, 'rad', 'horizontal field of view', minimum=0.1, maximum=3.0)
-    camera_near: float = param(0.02, 'm', 'nearest rendered distance', minimum=0.001)
-    camera_far: float = param(30.0, 'm', 'farthest rendered distance', minimum=0.1)
     wheel_separation_multiplier: float = param(1.0, '', "effective track / the wheels' geometric track, as "
                                                "diff_drive_controller has it (skid-steer bases slip: more than 1)",
                                                minimum=0.5, maximum=5.0)
@@ -106,60 +76,6 @@ class SimSettings:
                                       self.camera_optical_frame, tuple(self.left_wheel_joints.split()),
                                       tuple(self.right_wheel_joints.split()))
 
-    def check_together(self):
-        from closed_loop.settings import SettingsError
-        if not self.range_max > self.range_min:
-            raise SettingsError('~range_max: expected more than ~range_min (%g m), got %r'
-                                % (self.range_min, self.range_max))
-        if not self.scan_angle_max > self.scan_angle_min:
-            raise SettingsError('~scan_angle_max: expected more than ~scan_angle_min (%g rad), got %r'
-                                % (self.scan_angle_min, self.scan_angle_max))
-        if self.scan_angle_max - self.scan_angle_min > 2 * math.pi + 1e-9:
-            raise SettingsError('~scan_angle_max: the sweep may be at most 2 pi rad, got %g rad'
-                                % (self.scan_angle_max - self.scan_angle_min))
-        if not self.camera_far > self.camera_near:
-            raise SettingsError('~camera_far: expected more than ~camera_near (%g m), got %r'
-                                % (self.camera_near, self.camera_far))
-
-
-@dataclass(frozen=True)
-class ScanLayout:
-    """The angle fields of the scans, as a LaserScan carries them (angle_max is the last ray's angle)."""
-    angle_min: float
-    angle_max: float
-    angle_increment: float
-    samples: int
-
-
-def scan_layout(angle_min, angle_max, samples):
-    """Ray angles for a sweep: a full turn gives ``samples`` rays over [min, min + 2 pi); a partial sweep
-    puts the first ray at ``angle_min`` and the last at ``angle_max``."""
-    span = angle_max - angle_min
-    if samples == 1:
-        return ScanLayout(angle_min, angle_min, 0.0, 1)
-    if abs(span - 2 * math.pi) < 1e-9:
-        increment = span / samples
-    else:
-        increment = span / (samples - 1)
-    return ScanLayout(angle_min, angle_min + increment * (samples - 1), increment, samples)
-
-
-@dataclass(frozen=True)
-class CameraIntrinsics:
-    """Pinhole intrinsics of the rendered image, OpenCV/ROS convention (pixel centres at integers)."""
-    width: int
-    height: int
-    fx: float
-    fy: float
-    cx: float
-    cy: float
-
-
-def camera_intrinsics(width, height, horizontal_fov_rad):
-    """Square pixels; the principal point at the image centre, which is where OpenGL puts the axis."""
-    fx = 0.5 * width / math.tan(0.5 * horizontal_fov_rad)
-    return CameraIntrinsics(width, height, fx, fx, 0.5 * (width - 1), 0.5 * (height - 1))
-
 
 @dataclass(frozen=True)
 class Pose3D:
@@ -183,26 +99,19 @@ class Simulation:
         self.world = world
         self.settings = settings
         self.model = robot_model.load_robot_model(urdf or robot_model.default_urdf_path(), settings.names)
-        self.has_camera = settings.camera and self.model.has_camera
         # The track the kinematics use: the wheels' geometric one, times the multiplier (skid steer).
         self.track_m = self.model.wheel_separation_m * settings.wheel_separation_multiplier
         self.dt_s = 1.0 / settings.physics_rate_hz
-        self.layout = scan_layout(settings.scan_angle_min, settings.scan_angle_max, settings.scan_samples)
-        self.intrinsics = camera_intrinsics(settings.camera_width, settings.camera_height, settings.camera_fov)
         self.watchdog = drive.CommandWatchdog(settings.cmd_vel_timeout)
         self.odometry = drive.Odometry2D()
-        self._rng = np.random.default_rng(settings.noise_seed)
         self._client = pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
         if self._client < 0:
             raise RuntimeError('pybullet could not start (gui=%s)' % settings.gui)
         self.time_s = 0.0
         self._world_start_s = 0.0
         self._twist = drive.STOP
-        self._touching = set()
-        self.contact_count = 0
         self._wheel_targets = None
         self._build()
-        self._precompute_rays()
 
     # -- construction -------------------------------------------------------------------------------
     def _call(self, fn, *args, **kwargs):
@@ -265,11 +174,6 @@ class Simulation:
         return self._call(pybullet.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
                           baseOrientation=yaw_quaternion(obstacle.yaw))
 
-    def _precompute_rays(self):
-        layout = self.layout
-        angles = layout.angle_min + layout.angle_increment * np.arange(layout.samples)
-        self._ray_dirs = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
-
     # -- commands and stepping ----------------------------------------------------------------------
     def command(self, twist):
         """Follow a validated :class:`drive.VelocityCommand` from now until the watchdog expires."""
@@ -319,8 +223,6 @@ class Simulation:
         self.odometry.reset()
         self._world_start_s = self.time_s
         self._move_obstacles(self.time_s)
-        self._touching = set()
-        self.contact_count = 0
 
     # -- state ------------------------------------------------------------------------------------------
     def wheel_velocities(self):
@@ -354,68 +256,33 @@ class Simulation:
         """The ramped twist the wheels are being driven at."""
         return self._twist
 
-    # -- sensors ----------------------------------------------------------------------------------------
-    def scan(self):
-        """One LIDAR sweep from base_scan: float32 ranges in m, from the sensor origin (REP 117 values).
+    # -- what sensors (closed_loop.sensors) sample ------------------------------------------------------
+    def rotation_matrix(self, quaternion):
+        """The 3x3 rotation matrix of a quaternion (x, y, z, w)."""
+        return np.array(self._call(pybullet.getMatrixFromQuaternion, quaternion)).reshape(3, 3)
 
-        Each ray is cast from the sensor origin to ``range_max`` (the LIDAR link has no collision shape,
-        so a ray cannot hit the sensor itself), so a hit's distance is its fraction of ``range_max``.
-        A hit closer than ``range_min`` is reported as -inf (too close to measure); no return is +inf.
-        """
-        s = self.settings
-        pose = self.link_pose(self.model.names.scan_frame)
-        rotation = np.array(self._call(pybullet.getMatrixFromQuaternion, pose.orientation)).reshape(3, 3)
-        dirs = self._ray_dirs @ rotation.T
-        origin = np.asarray(pose.position)
-        ray_from = np.repeat(origin[None, :], len(dirs), axis=0)
-        ray_to = origin + dirs * s.range_max
+    def cast_rays(self, ray_from, ray_to):
+        """Cast rays (two (N, 3) arrays, m); (body uid of the first hit or -1, hit fraction) per ray."""
         hits = self._call(pybullet.rayTestBatch, ray_from.tolist(), ray_to.tolist())
-        n = len(dirs)
-        uids = np.fromiter((h[0] for h in hits), dtype=np.int64, count=n)
-        fractions = np.fromiter((h[2] for h in hits), dtype=np.float64, count=n)
-        is_hit = (uids >= 0) & (uids != self.robot_id)
-        ranges = np.where(is_hit, fractions * s.range_max, np.inf)
-        ranges[is_hit & (ranges < s.range_min)] = -np.inf
-        if s.scan_noise_stddev > 0:
-            finite = np.isfinite(ranges)
-            noisy = ranges[finite] + self._rng.normal(0.0, s.scan_noise_stddev, int(finite.sum()))
-            ranges[finite] = np.clip(noisy, s.range_min, s.range_max)
-        return ranges.astype(np.float32)
+        n = len(hits)
+        return (np.fromiter((h[0] for h in hits), dtype=np.int64, count=n),
+                np.fromiter((h[2] for h in hits), dtype=np.float64, count=n))
 
-    def render_camera(self):
-        """An RGB image (height, width, 3) uint8 from camera_link, looking along its +x axis."""
-        s = self.settings
-        pose = self.link_pose(self.model.names.camera_frame)
-        rotation = np.array(self._call(pybullet.getMatrixFromQuaternion, pose.orientation)).reshape(3, 3)
-        eye = np.asarray(pose.position)
-        view = self._call(pybullet.computeViewMatrix, eye.tolist(), (eye + rotation[:, 0]).tolist(),
-                          rotation[:, 2].tolist())
-        vertical_fov = 2.0 * math.atan(math.tan(0.5 * s.camera_fov) * s.camera_height / s.camera_width)
-        projection = self._call(pybullet.computeProjectionMatrixFOV, math.degrees(vertical_fov),
-                                s.camera_width / s.camera_height, s.camera_near, s.camera_far)
-        _, _, rgba, _, _ = self._call(pybullet.getCameraImage, s.camera_width, s.camera_height, view, projection,
-                                      renderer=pybullet.ER_TINY_RENDERER,
-                                      flags=pybullet.ER_NO_SEGMENTATION_MASK)
-        rgba = np.asarray(rgba, dtype=np.uint8).reshape(s.camera_height, s.camera_width, 4)
-        return np.ascontiguousarray(rgba[:, :, :3])
+    def render(self, width, height, eye, target, up, vertical_fov_deg, near_m, far_m):
+        """An RGBA image (height, width, 4) uint8 seen from ``eye`` toward ``target`` with ``up`` up."""
+        view = self._call(pybullet.computeViewMatrix, list(eye), list(target), list(up))
+        projection = self._call(pybullet.computeProjectionMatrixFOV, vertical_fov_deg, width / height, near_m, far_m)
+        _, _, rgba, _, _ = self._call(pybullet.getCameraImage, width, height, view, projection,
+                                      renderer=pybullet.ER_TINY_RENDERER, flags=pybullet.ER_NO_SEGMENTATION_MASK)
+        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
 
-    def new_contacts(self):
-        """Names of obstacles the robot has started touching since the last call (ground excluded)."""
-        touching = set()
-        for contact in self._call(pybullet.getContactPoints, bodyA=self.robot_id):
-            other = contact[2]
-            if other in self.obstacle_ids:
-                touching.add(other)
-        for uid in self._touching:
-            if self._call(pybullet.getClosestPoints, self.robot_id, uid, CONTACT_RELEASE_M):
-                touching.add(uid)
-        began = touching - self._touching
-        self._touching = touching
-        self.contact_count += len(began)
-        return sorted(self.obstacle_ids[uid] for uid in began)
+    def contacts_with_obstacles(self):
+        """Body uids of the obstacles the robot is in contact with now (the ground excluded)."""
+        return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] in self.obstacle_ids}
 
-    def touching(self):
-        return sorted(self.obstacle_ids[uid] for uid in self._touching)
+    def within(self, uid, distance_m):
+        """True if the robot is within ``distance_m`` of body ``uid``."""
+        return bool(self._call(pybullet.getClosestPoints, self.robot_id, uid, distance_m))
 
     def close(self):
         if self._client is not None and self._client >= 0:

@@ -121,13 +121,19 @@ def quiet_stdio():
 PARTS = ('physics', 'contacts', 'state', 'scan', 'camera')
 
 
-def run_core_loop(sim, sim_seconds, camera):
-    """Drive ``sim`` for ``sim_seconds`` of simulated time as SimNode.run does, minus ROS and sleeping.
+def run_core_loop(rig, sim_seconds, camera):
+    """Drive ``rig`` (a closed_loop.rig.Rig) for ``sim_seconds`` of simulated time as SimNode.run does,
+    minus ROS and sleeping.
 
     Returns (wall s, CPU s of this process, {part: [s per call]}) for the parts in PARTS.
     """
     from closed_loop import drive
-    s = sim.settings
+    from closed_loop.sensors.camera import Camera
+    from closed_loop.sensors.contacts import Contacts
+    from closed_loop.sensors.lidar import Lidar
+    from closed_loop.sensors.odometry import Odometry
+    from closed_loop.sensors.wheels import WheelEncoders
+    sim, s = rig.sim, rig.all_settings
     samples = {part: [] for part in PARTS}
     scan_period, odom_period = 1.0 / s.scan_rate_hz, 1.0 / s.odom_rate_hz
     camera_period = 1.0 / s.camera_rate_hz
@@ -146,45 +152,57 @@ def run_core_loop(sim, sim_seconds, camera):
         a = clock()
         t = sim.step()
         b = clock()
-        sim.new_contacts()
+        rig.sample(Contacts)
         samples['physics'].append(b - a)
         samples['contacts'].append(clock() - b)
         if t >= next_odom - half_step:
             next_odom += odom_period
             a = clock()
-            sim.ground_truth()
-            sim.wheel_positions()
-            sim.wheel_velocities()
+            rig.sample(Odometry)
+            rig.sample(WheelEncoders)
             samples['state'].append(clock() - a)
         if t >= next_scan - half_step:
             next_scan += scan_period
             a = clock()
-            sim.scan()
+            rig.sample(Lidar)
             samples['scan'].append(clock() - a)
         if camera and t >= next_camera - half_step:
             next_camera += camera_period
             a = clock()
-            sim.render_camera()
+            rig.sample(Camera)
             samples['camera'].append(clock() - a)
     return clock() - wall0, time.process_time() - cpu0, samples
 
 
+def default_settings():
+    """Every default of the simulator node's settings and its sensors', in one namespace."""
+    import dataclasses
+    import types
+    from closed_loop.scheduler import SchedulingSettings
+    from closed_loop.sensors import all_sensor_classes
+    from closed_loop.simulation import SimSettings
+    merged = {}
+    for cls in (SimSettings, SchedulingSettings) + tuple(c.settings_class for c in all_sensor_classes()
+                                                         if c.settings_class is not None):
+        merged.update({f.name: f.default for f in dataclasses.fields(cls)})
+    return types.SimpleNamespace(**merged)
+
+
 def make_simulation():
     with quiet_stdio():
-        from closed_loop import simulation, world
-        from closed_loop.settings import check
-        settings = check(simulation.SimSettings(world=WORLD))
+        from closed_loop import world
+        from closed_loop.rig import Rig
         loaded = world.load_world(world.resolve_world(WORLD, os.path.join(ROOT, 'worlds')))
-        sim = simulation.Simulation(loaded, settings, os.path.join(ROOT, 'urdf', 'closed_loop.urdf'))
+        rig = Rig(loaded, {'world': WORLD}, os.path.join(ROOT, 'urdf', 'closed_loop.urdf'))
         for _ in range(CORE_WARMUP_STEPS):
-            sim.step()
-    return sim
+            rig.sim.step()
+    return rig
 
 
 def core_benchmark(profile):
     """Part 1; returns {'cpu_pct_at_real_time', 'rtf_bound_camera_off'} for the summary."""
     sim = make_simulation()
-    s = sim.settings
+    s = sim.all_settings
     try:
         on_wall, on_cpu, on = run_core_loop(sim, CORE_CAMERA_ON_SIM_S, camera=True)
         off_wall, off_cpu, off = run_core_loop(sim, CORE_CAMERA_OFF_SIM_S, camera=False)
@@ -536,7 +554,6 @@ def print_run(title, run, settings, real_time, core):
 def node_benchmark(window_s, core):
     """Part 2; returns {run key: figures} for the summary."""
     import rospy
-    from closed_loop.simulation import SimSettings
     if port_in_use(ROS_PORT):
         raise BenchError('port %d is in use (another master?); the benchmark needs it for a private master'
                          % ROS_PORT)
@@ -567,7 +584,7 @@ def node_benchmark(window_s, core):
             shutil.rmtree(log_dir, ignore_errors=True)
         else:
             print('   logs kept in %s' % log_dir, flush=True)
-    settings = SimSettings()
+    settings = default_settings()
     print('   (LIDAR %d rays at %g Hz, camera %dx%d at %g Hz, physics %g Hz: the node\'s defaults)'
           % (settings.scan_samples, settings.scan_rate_hz, settings.camera_width, settings.camera_height,
              settings.camera_rate_hz, settings.physics_rate_hz))

@@ -10,7 +10,9 @@ import yaml
 from closed_loop import robot_model
 from closed_loop.scan import DetectorSettings, Scan, sector_readings
 from closed_loop.settings import check
-from closed_loop.simulation import SimSettings, Simulation
+from closed_loop.rig import Rig
+from closed_loop.simulation import SimSettings
+from conftest import SimWithSensors
 from closed_loop.world import Pose2D, footprint_overlaps, load_world, parse_world
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
@@ -18,17 +20,25 @@ PROFILES = ('closed_loop', 'burger', 'jackal')
 
 
 def profile(name):
-    """(URDF text, the profile's sim_node overrides as SimSettings)."""
+    """(URDF text, the profile's sim_node overrides as SimSettings, the overrides as given)."""
     with open(os.path.join(ROOT, 'config', 'robots', name + '.yaml')) as stream:
-        overrides = yaml.safe_load(stream) or {}
+        overrides = dict((yaml.safe_load(stream) or {}).get('sim', {}), camera=False)
     with open(os.path.join(ROOT, 'urdf', name + '.urdf')) as stream:
         urdf = stream.read()
-    return urdf, check(dataclasses.replace(SimSettings(camera=False), **overrides.get('sim', {})))
+    sim_fields = {f.name for f in dataclasses.fields(SimSettings)}
+    settings = check(dataclasses.replace(SimSettings(), **{k: v for k, v in overrides.items() if k in sim_fields}))
+    return urdf, settings, overrides
+
+
+def rig(name):
+    urdf, _settings, overrides = profile(name)
+    return SimWithSensors(Rig(load_world(os.path.join(ROOT, 'worlds', 'wall.yaml')), overrides, urdf))
 
 
 @pytest.mark.parametrize('name', PROFILES)
 def test_every_profile_has_its_urdf_and_only_known_parameters(name):
-    urdf, settings = profile(name)
+    urdf, settings, overrides = profile(name)
+    Rig(load_world(os.path.join(ROOT, 'worlds', 'wall.yaml')), overrides, urdf).close()  # no unknown parameter
     model = robot_model.load_robot_model(urdf, settings.names)
     assert model.footprint.length_m > 0 and model.footprint.width_m > 0
     assert model.scan_to_front_m > 0
@@ -36,18 +46,17 @@ def test_every_profile_has_its_urdf_and_only_known_parameters(name):
 
 @pytest.mark.parametrize('name, length, width', [('burger', 0.140, 0.178), ('jackal', 0.508, 0.430)])
 def test_footprints_are_the_published_sizes(name, length, width):
-    urdf, settings = profile(name)
+    urdf, settings, _ = profile(name)
     fp = robot_model.load_robot_model(urdf, settings.names).footprint
     assert (fp.length_m, fp.width_m) == pytest.approx((length, width), abs=0.002)
 
 
 @pytest.mark.parametrize('name', PROFILES)
 def test_each_robot_drives_straight_and_turns_in_the_core(name):
-    urdf, settings = profile(name)
-    sim = Simulation(load_world(os.path.join(ROOT, 'worlds', 'wall.yaml')), settings, urdf)
+    sim = rig(name)
     try:
         from closed_loop.drive import VelocityCommand
-        speed = min(0.2, settings.max_linear_speed)
+        speed = min(0.2, sim.settings.max_linear_speed)
         for i in range(int(2.0 / sim.dt_s)):
             if i % 10 == 0:
                 sim.command(VelocityCommand(speed, 0.0))
@@ -61,14 +70,13 @@ def test_each_robot_drives_straight_and_turns_in_the_core(name):
             sim.step()
         assert abs(sim.ground_truth()[0].yaw) > 0.5, 'did not turn'
         ranges = sim.scan()
-        assert len(ranges) == settings.scan_samples
+        assert len(ranges) == sim.settings.scan_samples
     finally:
         sim.close()
 
 
 def test_burger_scan_starts_straight_ahead():
-    urdf, settings = profile('burger')
-    sim = Simulation(load_world(os.path.join(ROOT, 'worlds', 'wall.yaml')), settings, urdf)
+    sim = rig('burger')
     try:
         sim.step()
         ranges = sim.scan()

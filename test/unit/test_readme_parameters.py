@@ -7,14 +7,17 @@ import re
 
 import pytest
 
-from closed_loop import commands, decisions, guard, markers, scan, simulation, state_machine, vision
+from closed_loop import commands, decisions, guard, markers, scan, scheduler, simulation, state_machine, vision
+from closed_loop.sensors import all_sensor_classes
 
 README = os.path.join(os.path.dirname(__file__), '..', '..', 'README.md')
 TABLE_HEADER = '| parameter | unit | default | meaning |'
-# README heading (its text) -> the settings class whose fields its parameter table lists.
+# README heading (its text) -> the settings classes whose fields its parameter table lists. The simulator's
+# table covers the node's own settings and those of every sensor class.
 SECTIONS = {
     '### cmd_vel_marker': markers.MarkerSettings,
-    '## The simulator: `sim_node`': simulation.SimSettings,
+    '## The simulator: `sim_node`': (simulation.SimSettings, scheduler.SchedulingSettings)
+    + tuple(cls.settings_class for cls in all_sensor_classes() if cls.settings_class is not None),
     '### velocity_publisher': commands.PublisherSettings,
     '### obstacle_detector': scan.DetectorSettings,
     '### stop_on_obstacle': decisions.StopSettings,
@@ -58,7 +61,8 @@ def test_parameter_table_matches_the_settings_class(heading):
     lines = open(README).read().splitlines()
     assert heading in lines, 'README has no heading %r' % heading
     rows = table_after(lines, heading)
-    fields = {f.name: f.default for f in dataclasses.fields(SECTIONS[heading])}
+    classes = SECTIONS[heading] if isinstance(SECTIONS[heading], tuple) else (SECTIONS[heading],)
+    fields = {f.name: f.default for cls in classes for f in dataclasses.fields(cls)}
     assert set(rows) == set(fields), 'README table under %r: missing %s, extra %s' % (
         heading, sorted(set(fields) - set(rows)), sorted(set(rows) - set(fields)))
     for name, default in fields.items():

@@ -9,7 +9,11 @@ import pytest
 from closed_loop import robot_model
 from closed_loop.drive import STOP, VelocityCommand
 from closed_loop.settings import SettingsError, check
-from closed_loop.simulation import SimSettings, Simulation, camera_intrinsics, scan_layout
+from closed_loop.rig import Rig
+from closed_loop.sensors.camera import CameraSettings, camera_intrinsics
+from closed_loop.sensors.lidar import LidarSettings, scan_layout
+from closed_loop.simulation import SimSettings
+from conftest import SimWithSensors
 from closed_loop.world import load_world, moving_obstacle_xy, parse_world
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
@@ -34,8 +38,7 @@ def make_sim():
     sims = []
 
     def make(a_world, **overrides):
-        settings = check(dataclasses.replace(SimSettings(), **overrides))
-        sim = Simulation(a_world, settings)
+        sim = SimWithSensors(Rig(a_world, overrides))
         sims.append(sim)
         return sim
     yield make
@@ -115,10 +118,11 @@ def test_camera_intrinsics_centre_and_focal_length():
 # --- SimSettings --------------------------------------------------------------------------------
 
 def test_sim_settings_defaults_pass_their_own_checks():
-    settings = check(SimSettings())
-    assert settings == SimSettings()
+    assert check(SimSettings()) == SimSettings()
+    settings = check(LidarSettings())
     assert settings.range_max > settings.range_min
     assert type(settings.scan_samples) is int
+    assert check(CameraSettings()) == CameraSettings()
 
 
 @pytest.mark.parametrize('overrides,named', [
@@ -131,13 +135,14 @@ def test_sim_settings_defaults_pass_their_own_checks():
     ({'camera_near': 2.0, 'camera_far': 0.5}, '~camera_far: '),
 ])
 def test_sim_settings_check_together_rejects_inconsistent_pairs(overrides, named):
+    cls = CameraSettings if named.startswith('~camera') else LidarSettings
     with pytest.raises(SettingsError) as caught:
-        check(dataclasses.replace(SimSettings(), **overrides))
+        check(dataclasses.replace(cls(), **overrides))
     assert str(caught.value).startswith(named)
 
 
 def test_sim_settings_accept_a_full_turn_from_zero():
-    settings = check(dataclasses.replace(SimSettings(), scan_angle_min=0.0, scan_angle_max=2 * math.pi))
+    settings = check(dataclasses.replace(LidarSettings(), scan_angle_min=0.0, scan_angle_max=2 * math.pi))
     assert settings.scan_angle_max == 2 * math.pi
 
 
@@ -259,7 +264,7 @@ def test_noise_is_drawn_afresh_for_each_scan_and_only_on_returns(make_sim):
     errors = first[finite] - exact[finite]
     assert 0.025 < float(np.std(errors)) < 0.1
     assert abs(float(np.mean(errors))) < 0.03
-    settings = SimSettings()
+    settings = LidarSettings()
     assert np.all((first[finite] >= settings.range_min) & (first[finite] <= settings.range_max))
 
 

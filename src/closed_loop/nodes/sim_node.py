@@ -1,13 +1,13 @@
 """The simulator node: a pybullet world and robot behind the usual ROS topics of a mobile base."""
-import math
 import os
 import sys
 import threading
 import time
+from collections import namedtuple
 
 import rospkg
 import rospy
-from geometry_msgs.msg import Quaternion, TransformStamped, Twist
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
@@ -15,15 +15,35 @@ from std_msgs.msg import String, UInt32
 from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 
-from closed_loop import drive, image_encoding, robot_model, world as world_mod
-from closed_loop.geometry import yaw_quaternion
+from closed_loop import drive, robot_model, world as world_mod
+from closed_loop.nodes import sensor_messages as to_msgs
 from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
+from closed_loop.scheduler import Schedule, SchedulingSettings
+from closed_loop.sensors.camera import Camera
+from closed_loop.sensors.contacts import Contacts
+from closed_loop.sensors.lidar import Lidar
+from closed_loop.sensors.odometry import Odometry as OdometrySensor
+from closed_loop.sensors.wheels import WheelEncoders
 from closed_loop.simulation import SimSettings, Simulation
 from closed_loop.sources import SourceCheck
 
-ODOM_FRAME = 'odom'
-WORLD_FRAME = 'world'
+#: One line per sensor: its core class (closed_loop.sensors), its publications (topic, type, queue size,
+#: latched), its conversion (closed_loop.nodes.sensor_messages), whether it is sampled only while one of
+#: its topics has a subscriber (like a lazy camera driver), and whether /clock goes out first (consumers
+#: judge a scan's or an image's age by it). Lines are served in this order after each physics step.
+SensorLine = namedtuple('SensorLine', 'sensor publications convert lazy clock_first')
+SENSORS = (
+    SensorLine(Contacts, (('contact', String, 10, False), ('contact_count', UInt32, 1, True)),
+               to_msgs.contact_messages, False, False),
+    SensorLine(OdometrySensor, (('odom', Odometry, 10, False), ('/tf', TFMessage, 20, False),
+                                ('base_pose_ground_truth', Odometry, 10, False)),
+               to_msgs.odometry_messages, True, False),
+    SensorLine(WheelEncoders, (('joint_states', JointState, 10, False),), to_msgs.joint_messages, True, False),
+    SensorLine(Lidar, (('scan', LaserScan, 5, False),), to_msgs.scan_messages, False, True),
+    SensorLine(Camera, (('camera/image_raw', Image, 2, False), ('camera/camera_info', CameraInfo, 2, False)),
+               to_msgs.camera_messages, True, True),
+)
 # How far behind the wall clock the loop may fall before it stops trying to catch up.
 MAX_LAG_S = 0.25
 # Time a service call waits for the loop to carry out its request.
@@ -32,22 +52,11 @@ SERVICE_WAIT_S = 5.0
 LOG_PERIOD_S = 2.0
 # Idle sleep while paused.
 PAUSED_POLL_S = 0.01
-# A small diagonal covariance for odometry (m^2, rad^2), so consumers that weigh it do not divide by 0.
-ODOM_POSE_VARIANCE = 1e-3
-ODOM_TWIST_VARIANCE = 1e-3
 
 
 def package_path():
     """closed_loop's share folder (source tree or install space), where worlds/ and urdf/ live."""
     return rospkg.RosPack().get_path('closed_loop')
-
-
-def _stamp(t_s):
-    return rospy.Time.from_sec(t_s)
-
-
-def _quaternion_yaw(yaw):
-    return Quaternion(*yaw_quaternion(yaw))
 
 
 class SimNode:
@@ -73,11 +82,15 @@ class SimNode:
         contact_count (std_msgs/UInt32, latched): contacts begun since start or the last reset.
     Services:
         ~reset_world, ~pause_physics, ~unpause_physics (std_srvs/Empty).
-    Parameters: see :class:`closed_loop.simulation.SimSettings` (``~world``, ``~real_time_factor``, ...).
+    Parameters: :class:`closed_loop.simulation.SimSettings` (world, robot, drive),
+    :class:`closed_loop.scheduler.SchedulingSettings` (``~real_time_factor``, ``~max_clock_rate_hz``), and
+    each sensor's settings class (``closed_loop.sensors``: LIDAR, camera, odometry, wheel encoders).
+    Sensors are served from one table, :data:`SENSORS`, by one schedule on simulated time.
     """
 
     def __init__(self):
         self.settings = load_settings(SimSettings)
+        self.scheduling = load_settings(SchedulingSettings)
         urdf = rospy.get_param('robot_description', None)
         if not isinstance(urdf, str) or not urdf.strip():
             urdf = os.path.join(package_path(), 'urdf', 'closed_loop.urdf')
@@ -95,33 +108,35 @@ class SimNode:
             rospy.logfatal('sim_node: cannot load the world: %s', error)
             sys.exit(1)
         self.sim = Simulation(world, self.settings, urdf)
-        rospy.loginfo('sim_node: world %r from %s; robot %s; real_time_factor %g; camera %s', world.name, path,
-                      self.sim.model.source, self.settings.real_time_factor, 'on' if self.sim.has_camera else 'off')
+        # The sensors this robot has, each with its settings, and their publishers.
+        self.sensors = []
+        self.publishers = {}
+        for line in SENSORS:
+            settings = load_settings(line.sensor.settings_class) if line.sensor.settings_class else None
+            sensor = line.sensor(settings, self.sim)
+            if not sensor.available:
+                rospy.loginfo('sim_node: no %s on this robot (or turned off)', line.sensor.__name__.lower())
+                continue
+            self.sensors.append((line, sensor))
+            for topic, msg_type, queue, latched in line.publications:
+                self.publishers[topic] = rospy.Publisher(topic, msg_type, queue_size=queue, latch=latched)
+        self.contacts = next(sensor for line, sensor in self.sensors if isinstance(sensor, Contacts))
+        rospy.loginfo('sim_node: world %r from %s; robot %s; real_time_factor %g; sensors %s', world.name, path,
+                      self.sim.model.source, self.scheduling.real_time_factor,
+                      ', '.join(type(sensor).__name__ for _, sensor in self.sensors))
         self._lock = threading.Lock()
         self._pending_command = None
         self._requests = []
         self._paused = False
         self._stopped = threading.Event()
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
-        self.scan_pub = rospy.Publisher('scan', LaserScan, queue_size=5)
-        self.odom_pub = rospy.Publisher('odom', Odometry, queue_size=10)
-        self.truth_pub = rospy.Publisher('base_pose_ground_truth', Odometry, queue_size=10)
-        self.joint_pub = rospy.Publisher('joint_states', JointState, queue_size=10)
-        self.tf_pub = rospy.Publisher('/tf', TFMessage, queue_size=20)
-        self.contact_pub = rospy.Publisher('contact', String, queue_size=10)
-        self.contact_count_pub = rospy.Publisher('contact_count', UInt32, queue_size=1, latch=True)
-        if self.settings.camera and not self.sim.has_camera:
-            rospy.loginfo('sim_node: the robot has no camera (~camera_frame is empty); no images')
-        if self.sim.has_camera:
-            self.image_pub = rospy.Publisher('camera/image_raw', Image, queue_size=2)
-            self.info_pub = rospy.Publisher('camera/camera_info', CameraInfo, queue_size=2)
         self._cmd_source = SourceCheck(rospy.resolve_name('cmd_vel'))
         self.cmd_sub = rospy.Subscriber('cmd_vel', Twist, self._on_cmd_vel, queue_size=10)
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))
         rospy.Service('~pause_physics', Empty, lambda _: self._request('pause'))
         rospy.Service('~unpause_physics', Empty, lambda _: self._request('unpause'))
         rospy.on_shutdown(self._stopped.set)
-        self.contact_count_pub.publish(UInt32(0))
+        self.publishers['contact_count'].publish(UInt32(0))
 
     # -- inputs (other threads): store, and let the loop act -----------------------------------------------
     def _on_cmd_vel(self, msg):
@@ -160,7 +175,7 @@ class SimNode:
         for what, done in requests:
             if what == 'reset':
                 self.sim.reset_world()
-                self.contact_count_pub.publish(UInt32(0))
+                self.publishers['contact_count'].publish(UInt32(0))
                 rospy.loginfo('sim_node: world reset')
             elif what == 'pause':
                 self._paused = True
@@ -171,20 +186,19 @@ class SimNode:
             done.set()
 
     # -- the loop: the only code that calls the simulation ----------------------------------------------------
+    def wanted(self, topic):
+        """True if ``topic`` has a subscriber (messages nobody listens to are not built)."""
+        return self.publishers[topic].get_num_connections() > 0
+
     def run(self):
-        s = self.settings
+        s = self.scheduling
         sim = self.sim
-        scan_period = 1.0 / s.scan_rate_hz
-        odom_period = 1.0 / s.odom_rate_hz
-        joints_period = 1.0 / s.joint_states_rate_hz
-        next_joints = 0.0
-        camera_period = 1.0 / s.camera_rate_hz
-        half_step = 0.5 * sim.dt_s
-        camera = sim.has_camera
-        next_scan = 0.0
-        next_odom = 0.0
-        # Render half a period after the scans, so a frame never delays the scan that follows it.
-        next_camera = 0.5 * camera_period
+        schedule = Schedule(sim.dt_s)
+        lines = {}
+        for line, sensor in self.sensors:
+            name = type(sensor).__name__
+            schedule.add(name, sensor.period_s, sensor.offset_s)
+            lines[name] = (line, sensor)
         wall_ref, sim_ref = time.monotonic(), sim.time_s
         clock_min_wall_s = 1.0 / s.max_clock_rate_hz
         last_clock_wall = time.monotonic()
@@ -196,31 +210,19 @@ class SimNode:
                 wall_ref, sim_ref = time.monotonic(), sim.time_s
                 continue
             t = sim.step()
-            sensing = t >= next_scan - half_step or (camera and t >= next_camera - half_step)
+            due = [lines[name] for name in schedule.due(t)]
             now_wall = time.monotonic()
-            if sensing or now_wall - last_clock_wall >= clock_min_wall_s:
+            if any(line.clock_first for line, _ in due) or now_wall - last_clock_wall >= clock_min_wall_s:
                 # Every node on simulated time pays for each /clock message; faster than real time,
                 # publishing every step would cost more than the physics.
                 self._publish_clock()
                 last_clock_wall = now_wall
-            for name in sim.new_contacts():
-                rospy.logwarn('sim_node: contact with %r at t = %.3f s', name, t)
-                self.contact_pub.publish(String(name))
-                self.contact_count_pub.publish(UInt32(sim.contact_count))
-            if t >= next_odom - half_step:
-                next_odom += odom_period
-                self._publish_state(t)
-            if t >= next_joints - half_step:
-                next_joints += joints_period
-                self._publish_joints(_stamp(t))
-            if t >= next_scan - half_step:
-                next_scan += scan_period
-                self._publish_scan(t, sim.scan())
-            if camera and t >= next_camera - half_step:
-                next_camera += camera_period
-                # Like a lazy camera driver: no subscriber, no rendering.
-                if self.image_pub.get_num_connections() + self.info_pub.get_num_connections() > 0:
-                    self._publish_camera(t, sim.render_camera())
+            stamp = rospy.Time.from_sec(t)
+            for line, sensor in due:
+                if line.lazy and not any(self.wanted(topic) for topic, _, _, _ in line.publications):
+                    continue
+                for topic, msg in line.convert(self, sensor, sensor.sample(sim), stamp):
+                    self.publishers[topic].publish(msg)
             if s.real_time_factor > 0:
                 target = wall_ref + (t - sim_ref) / s.real_time_factor
                 delay = target - time.monotonic()
@@ -234,100 +236,7 @@ class SimNode:
 
     # -- outputs -----------------------------------------------------------------------------------------------
     def _publish_clock(self):
-        self.clock_pub.publish(Clock(clock=_stamp(self.sim.time_s)))
-
-    def _publish_state(self, t):
-        sim = self.sim
-        stamp = _stamp(t)
-        # (joint states go out on their own period, see _publish_joints)
-        odo = sim.odometry
-        # Messages nobody listens to are not built (faster than real time this is most of the ROS cost).
-        if self.odom_pub.get_num_connections() + self.tf_pub.get_num_connections() > 0:
-            self._publish_odometry(stamp, odo)
-        if self.truth_pub.get_num_connections() > 0:
-            self._publish_truth(stamp)
-
-    def _publish_joints(self, stamp):
-        sim = self.sim
-        if self.joint_pub.get_num_connections() > 0:
-            joints = JointState()
-            joints.header.stamp = stamp
-            joints.name, joints.position, joints.velocity = sim.wheel_joint_states()
-            self.joint_pub.publish(joints)
-
-    def _publish_odometry(self, stamp, odo):
-        odom = Odometry()
-        odom.header.stamp = stamp
-        odom.header.frame_id = ODOM_FRAME
-        odom.child_frame_id = self.settings.base_frame
-        odom.pose.pose.position.x, odom.pose.pose.position.y = odo.x, odo.y
-        odom.pose.pose.orientation = _quaternion_yaw(odo.yaw)
-        odom.twist.twist.linear.x = odo.twist.linear_x
-        odom.twist.twist.angular.z = odo.twist.angular_z
-        for i in range(6):
-            odom.pose.covariance[7 * i] = ODOM_POSE_VARIANCE
-            odom.twist.covariance[7 * i] = ODOM_TWIST_VARIANCE
-        self.odom_pub.publish(odom)
-
-        tf = TransformStamped()
-        tf.header.stamp = stamp
-        tf.header.frame_id = ODOM_FRAME
-        tf.child_frame_id = self.settings.base_frame
-        tf.transform.translation.x, tf.transform.translation.y = odo.x, odo.y
-        tf.transform.rotation = odom.pose.pose.orientation
-        self.tf_pub.publish(TFMessage([tf]))
-
-    def _publish_truth(self, stamp):
-        pose, (linear, angular) = self.sim.ground_truth()
-        truth = Odometry()
-        truth.header.stamp = stamp
-        truth.header.frame_id = WORLD_FRAME
-        truth.child_frame_id = self.settings.base_frame
-        p = truth.pose.pose
-        p.position.x, p.position.y, p.position.z = pose.position
-        p.orientation = Quaternion(*pose.orientation)
-        # nav_msgs/Odometry carries the twist in the child frame.
-        yaw = pose.yaw
-        truth.twist.twist.linear.x = math.cos(yaw) * linear[0] + math.sin(yaw) * linear[1]
-        truth.twist.twist.linear.y = -math.sin(yaw) * linear[0] + math.cos(yaw) * linear[1]
-        truth.twist.twist.linear.z = linear[2]
-        truth.twist.twist.angular.z = angular[2]
-        self.truth_pub.publish(truth)
-
-    def _publish_scan(self, t, ranges):
-        s = self.settings
-        layout = self.sim.layout
-        msg = LaserScan()
-        msg.header.stamp = _stamp(t)
-        msg.header.frame_id = self.settings.scan_frame
-        msg.angle_min = layout.angle_min
-        msg.angle_max = layout.angle_max
-        msg.angle_increment = layout.angle_increment
-        msg.scan_time = 1.0 / s.scan_rate_hz
-        # A LIDAR spinning once per scan_time spends this long per ray.
-        msg.time_increment = msg.scan_time * abs(layout.angle_increment) / (2.0 * math.pi)
-        msg.range_min = s.range_min
-        msg.range_max = s.range_max
-        msg.ranges = ranges.tolist()
-        self.scan_pub.publish(msg)
-
-    def _publish_camera(self, t, rgb):
-        stamp = _stamp(t)
-        height, width, step, data = image_encoding.array_to_image(rgb, 'rgb8')
-        image = Image(height=height, width=width, encoding='rgb8', is_bigendian=0, step=step, data=data)
-        image.header.stamp = stamp
-        image.header.frame_id = self.settings.camera_optical_frame
-        self.image_pub.publish(image)
-        k = self.sim.intrinsics
-        info = CameraInfo()
-        info.header = image.header
-        info.height, info.width = height, width
-        info.distortion_model = 'plumb_bob'
-        info.D = [0.0] * 5
-        info.K = [k.fx, 0.0, k.cx, 0.0, k.fy, k.cy, 0.0, 0.0, 1.0]
-        info.R = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
-        info.P = [k.fx, 0.0, k.cx, 0.0, 0.0, k.fy, k.cy, 0.0, 0.0, 0.0, 1.0, 0.0]
-        self.info_pub.publish(info)
+        self.clock_pub.publish(Clock(clock=rospy.Time.from_sec(self.sim.time_s)))
 
 
 def main():

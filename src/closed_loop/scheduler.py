@@ -1,0 +1,44 @@
+"""When the simulator node steps physics and samples each sensor: the schedule on simulated time, and the
+node's scheduling settings (real-time factor, /clock rate). Free of ROS."""
+from dataclasses import dataclass
+
+from closed_loop.settings import param
+
+
+@dataclass
+class SchedulingSettings:
+    """The simulator node's scheduling ``~parameters``."""
+    real_time_factor: float = param(1.0, '', 'simulated seconds per wall second; 0 = as fast as possible',
+                                    minimum=0.0)
+    max_clock_rate_hz: float = param(100.0, 'Hz', '/clock is published after a physics step at most this '
+                                     'often per wall second (every step at real time; throttled when '
+                                     'faster), and always before a scan or camera frame',
+                                     minimum=1.0)
+
+
+class Schedule:
+    """Which named tasks are due after each physics step.
+
+    A task has a period (s of simulated time; None: every step) and an offset within it. ``due(t_s)``
+    returns the tasks due at simulated time ``t_s`` in the order they were added, each at most once per
+    call, and advances each by whole periods; a task counts as due half a physics step early, so that a
+    period that is a whole number of steps never slips a step through rounding.
+    """
+
+    def __init__(self, step_s):
+        self._half_step_s = 0.5 * step_s
+        self._tasks = []  # [name, period or None, next due time]
+
+    def add(self, name, period_s=None, offset_s=0.0):
+        self._tasks.append([name, period_s, offset_s])
+
+    def due(self, t_s):
+        names = []
+        for task in self._tasks:
+            name, period, next_s = task
+            if period is None:
+                names.append(name)
+            elif t_s >= next_s - self._half_step_s:
+                task[2] = next_s + period
+                names.append(name)
+        return names
