@@ -3,9 +3,11 @@ colour, and the text for the obstacle distance. The cmd_vel_marker node turns th
 import math
 from dataclasses import dataclass
 
+from closed_loop.decisions import Zone
 from closed_loop.settings import MIN_RATE_HZ, param
 
-CLEAR, SLOW, STOP = 'CLEAR', 'SLOW', 'STOP'
+# The colour zones are stop_on_obstacle's zones, named by their enum.
+CLEAR, SLOW, STOP = Zone.CLEAR.name, Zone.SLOW.name, Zone.STOP.name
 # RGBA in [0, 1]: green, amber, red, as traffic lights.
 ZONE_COLOURS = {CLEAR: (0.1, 0.85, 0.2, 1.0), SLOW: (1.0, 0.75, 0.0, 1.0), STOP: (0.95, 0.1, 0.1, 1.0)}
 

@@ -84,6 +84,8 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 from closed_loop import world as world_mod  # noqa: E402
 from closed_loop.decisions import StopSettings  # noqa: E402
 from closed_loop.scan import ScanError, sector_min  # noqa: E402
+from closed_loop.sensors.lidar import LidarSettings  # noqa: E402
+from closed_loop.sensors.odometry import OdometrySettings  # noqa: E402
 from closed_loop.simulation import SimSettings  # noqa: E402
 
 DEFAULT_PORT = 11396
@@ -103,10 +105,11 @@ SPREAD_TARGET_M = 0.03
 
 STOP = StopSettings()
 SIM = SimSettings()
-SCAN_PERIOD_S = 1.0 / SIM.scan_rate_hz
+LIDAR = LidarSettings()
+SCAN_PERIOD_S = 1.0 / LIDAR.scan_rate_hz
 TIMER_PERIOD_S = 1.0 / STOP.rate_hz
 CLOCK_STEP_S = 1.0 / SIM.physics_rate_hz
-TRUTH_PERIOD_S = 1.0 / SIM.odom_rate_hz
+TRUTH_PERIOD_S = 1.0 / OdometrySettings().odom_rate_hz
 LATENCY_TARGET_S = SCAN_PERIOD_S + LATENCY_MARGIN_S
 # Evenly spaced phases per uniform wait in the "any phase" and timer-only models.
 PHASE_STEPS = 100
@@ -822,7 +825,7 @@ def main():
     print('closed-loop benchmark, world %r: wall face x = %.3f m, stop_distance %.2f m '
           '(line x = %.3f m);' % (world.name, wall_x, STOP.stop_distance, bench.line_x))
     print('LIDAR %g Hz, controller timer %g Hz, clock step %g ms; master on port %d; logs in %s'
-          % (SIM.scan_rate_hz, STOP.rate_hz, ms(CLOCK_STEP_S), args.port, log_dir))
+          % (LIDAR.scan_rate_hz, STOP.rate_hz, ms(CLOCK_STEP_S), args.port, log_dir))
     print('%d cores, load average %.2f %.2f %.2f at start (shared cores: other load shows in the '
           'figures)' % ((os.cpu_count(),) + os.getloadavg()), flush=True)
     # SIGTERM unwinds like Ctrl-C, so that the finally below stops every process group.

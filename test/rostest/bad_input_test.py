@@ -24,23 +24,27 @@ from std_msgs.msg import Bool, Float32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
+from closed_loop.decisions import StopSettings  # noqa: E402
+from closed_loop.nodes.common import LOG_PERIOD_S  # noqa: E402
+from closed_loop.sensors.lidar import LidarSettings  # noqa: E402
+from closed_loop.vision import VisionSettings  # noqa: E402
 
 NODES = ('/stop_on_obstacle', '/obstacle_detector', '/vision_node')
 
 # Defaults of the nodes under test (StopSettings, the scan nodes' LOG_PERIOD_S, VisionSettings).
-CRUISE_SPEED_MPS = 0.5
-SCAN_TIMEOUT_S = 0.5
-CONTROL_PERIOD_S = 0.1          # 1 / ~rate_hz
-SCAN_NODES_LOG_PERIOD_S = 2.0   # a repeated scan error is logged at most this often
-VISION_LOG_PERIOD_S = 1.0       # ~log_period_s
+CRUISE_SPEED_MPS = StopSettings().cruise_speed
+SCAN_TIMEOUT_S = StopSettings().scan_timeout
+CONTROL_PERIOD_S = 1.0 / StopSettings().rate_hz
+SCAN_NODES_LOG_PERIOD_S = LOG_PERIOD_S   # a repeated scan error is logged at most this often
+VISION_LOG_PERIOD_S = VisionSettings().log_period_s
 
 # A scan laid out like the simulator's: 360 rays from -pi, ray 180 straight ahead.
 SCAN_RAYS = 360
 SCAN_ANGLE_MIN_RAD = -math.pi
 SCAN_INCREMENT_RAD = 2.0 * math.pi / SCAN_RAYS
 FRONT_RAY = 180
-RANGE_MIN_M = 0.12
-RANGE_MAX_M = 3.5
+RANGE_MIN_M = LidarSettings().range_min
+RANGE_MAX_M = LidarSettings().range_max
 CLEAR_RANGE_M = 2.0             # beyond ~slow_distance (1 m): cruise
 SHORT_RAY_COUNT = 300           # a ranges length the angle fields do not describe
 SCAN_PERIOD_S = 0.1             # 10 Hz, like the simulated LIDAR

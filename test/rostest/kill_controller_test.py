@@ -14,10 +14,12 @@ import rostest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
+from closed_loop.decisions import StopSettings  # noqa: E402
+from closed_loop.simulation import SimSettings  # noqa: E402
 
-CMD_VEL_TIMEOUT_S = 0.5       # sim_node defaults
-MAX_LINEAR_ACCEL_MPS2 = 2.0
-CONTROL_PERIOD_S = 0.1        # the last command may be up to one period old at the kill
+CMD_VEL_TIMEOUT_S = SimSettings().cmd_vel_timeout   # sim_node's defaults, from their one source
+MAX_LINEAR_ACCEL_MPS2 = SimSettings().max_linear_accel
+CONTROL_PERIOD_S = 1.0 / StopSettings().rate_hz  # the last command may be up to one period old at the kill
 SLACK_S = 0.15
 AT_REST_MPS = 0.01
 

@@ -14,10 +14,11 @@ from std_msgs.msg import Bool, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
+from closed_loop.decisions import StopSettings  # noqa: E402
 
 WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/closed_loop.urdf)
-SLOW_DISTANCE_M = 1.0        # stop_on_obstacle defaults
-SLOW_SPEED_MPS = 0.2
+SLOW_DISTANCE_M = StopSettings().slow_distance   # stop_on_obstacle's defaults, from their one source
+SLOW_SPEED_MPS = StopSettings().slow_speed
 AT_REST_MPS = 0.01
 SPEED_TOLERANCE_MPS = 0.05
 REST_FOR_S = 1.0             # simulated seconds at rest that count as "came to rest"

@@ -17,12 +17,13 @@ from std_msgs.msg import UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
+from closed_loop.simulation import SimSettings  # noqa: E402
 
 WALL_NEAR_FACE_X_M = 3.0        # worlds/wall.yaml
 WALL_HALF_SPAN_Y_M = 2.0
 RANGE_TOLERANCE_M = 0.01
-CMD_VEL_TIMEOUT_S = 0.5         # sim_node's default ~cmd_vel_timeout
-MAX_LINEAR_ACCEL_MPS2 = 2.0     # sim_node's default ~max_linear_accel
+CMD_VEL_TIMEOUT_S = SimSettings().cmd_vel_timeout        # sim_node's defaults, from their one source
+MAX_LINEAR_ACCEL_MPS2 = SimSettings().max_linear_accel
 # Slack for the physics settling and the 50 Hz ground-truth period.
 STOP_SLACK_S = 0.15
 AT_REST_MPS = 0.01

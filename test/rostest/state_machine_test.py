@@ -11,9 +11,10 @@ from std_msgs.msg import String, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
+from closed_loop.state_machine import BackUpSettings, State  # noqa: E402
 
-BACKUP_S = 2.0            # state_machine_controller defaults (the lesson's)
-BACKUP_SPEED_MPS = -0.3
+BACKUP_S = BackUpSettings().backup_duration   # state_machine_controller's defaults (the lesson's)
+BACKUP_SPEED_MPS = BackUpSettings().backup_speed
 TIME_TOLERANCE_S = 0.15   # one 10 Hz control period plus a clock step
 SPEED_TOLERANCE_MPS = 0.05
 
@@ -30,12 +31,12 @@ class StateMachineInLoop(unittest.TestCase):
         while not rospy.is_shutdown():
             rospy.sleep(0.1)
             names = [s for _, s in states]
-            if 'BACKING_UP' in names and names.index('BACKING_UP') < len(names) - 1:
+            if State.BACKING_UP.name in names and names.index(State.BACKING_UP.name) < len(names) - 1:
                 break
         harness.sim_sleep(1.0)
         names = [s for _, s in states]
-        i = names.index('BACKING_UP')
-        self.assertEqual(names[i + 1], 'EXPLORING', states)
+        i = names.index(State.BACKING_UP.name)
+        self.assertEqual(names[i + 1], State.EXPLORING.name, states)
         began, ended = states[i][0], states[i + 1][0]
         self.assertAlmostEqual(ended - began, BACKUP_S, delta=TIME_TOLERANCE_S,
                                msg='backed up for %.3f s of simulated time' % (ended - began))

@@ -11,12 +11,11 @@ from std_msgs.msg import String
 from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import LOG_PERIOD_S, init_node, load_settings
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.scan import ScanError
 from closed_loop.sources import SourceCheck
 
-LOG_PERIOD_S = 2.0
 
 
 class CmdVelGuard:

@@ -9,6 +9,9 @@ import rospy
 from closed_loop import robot_model
 from closed_loop.settings import SettingsError, from_params
 
+#: How often a repeated warning or error of a node may reappear in the log (s).
+LOG_PERIOD_S = 2.0
+
 #: rospy's screen format with the node's name added, so every line says which node it is from. Used
 #: unless the user has set ROSCONSOLE_FORMAT; roslaunch's log files and /rosout name the node anyway.
 LOG_FORMAT = '[${severity}] [${time}] [${node}]: ${message}'

@@ -9,13 +9,11 @@ from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
-from closed_loop.nodes.common import LaserMounting
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist_from_command
 from closed_loop.scan import ScanError, sector_min
 from closed_loop.sources import SourceCheck
 
-# How often a repeated warning or error may reappear in the log (s).
-LOG_PERIOD_S = 2.0
 
 
 class FrontController:

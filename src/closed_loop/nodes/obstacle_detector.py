@@ -5,13 +5,11 @@ import rospy
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float32
 
-from closed_loop.nodes.common import LaserMounting, init_node, load_settings
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
 from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
 
-# How often a repeated warning or error may reappear in the log (s).
-LOG_PERIOD_S = 2.0
 
 # One output per scan: a burst of scans (rosbag play, a busy machine) must not lose any, and each is
 # cheap to process, so queue a few rather than keep only the newest.

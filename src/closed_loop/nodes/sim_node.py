@@ -17,7 +17,7 @@ from tf2_msgs.msg import TFMessage
 
 from closed_loop import drive, robot_model, world as world_mod
 from closed_loop.nodes import sensor_messages as to_msgs
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import LOG_PERIOD_S, init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
 from closed_loop.scheduler import Schedule, SchedulingSettings
 from closed_loop.sensors.camera import Camera
@@ -48,8 +48,6 @@ SENSORS = (
 MAX_LAG_S = 0.25
 # Time a service call waits for the loop to carry out its request.
 SERVICE_WAIT_S = 5.0
-# How often a repeated warning may reappear in the log (s).
-LOG_PERIOD_S = 2.0
 # Idle sleep while paused.
 PAUSED_POLL_S = 0.01
 
