@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pybullet
 
-from closed_loop import drive, robot_model, shapes, world as world_mod
+from closed_loop import drive, obstacles, robot_model, shapes
 from closed_loop.geometry import quaternion_yaw, yaw_quaternion
 from closed_loop.settings import param
 
@@ -136,7 +136,7 @@ class Simulation:
             uid = self._add_obstacle(obstacle)
             self.obstacle_ids[uid] = obstacle.name
             if obstacle.motion is not None:
-                points, cycle_m = world_mod.motion_path(obstacle)
+                points, cycle_m = obstacles.motion_path(obstacle)
                 self._movers[uid] = (obstacle, points, cycle_m)
         start = self.world.robot_start
         # pybullet reads URDF from a file only; the text (robot_description) is the source.
@@ -204,7 +204,7 @@ class Simulation:
 
     def _move_obstacles(self, t_s):
         for uid, (obstacle, points, cycle_m) in self._movers.items():
-            x, y = world_mod.point_on_path(points, cycle_m, obstacle.motion.speed * (t_s - self._world_start_s))
+            x, y = obstacles.point_on_path(points, cycle_m, obstacle.motion.speed * (t_s - self._world_start_s))
             self._call(pybullet.resetBasePositionAndOrientation, uid, [x, y, obstacle.position[2]],
                        yaw_quaternion(obstacle.yaw))
 

@@ -13,7 +13,8 @@ from closed_loop.settings import check
 from closed_loop.rig import Rig
 from closed_loop.simulation import SimSettings
 from conftest import SimWithSensors
-from closed_loop.world import Pose2D, footprint_overlaps, load_world, parse_world
+from closed_loop.obstacles import footprint_overlaps
+from closed_loop.world import Pose2D, load_world, parse_world
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
 PROFILES = ('closed_loop', 'burger', 'jackal')

@@ -14,7 +14,8 @@ from closed_loop.sensors.camera import CameraSettings, camera_intrinsics
 from closed_loop.sensors.lidar import LidarSettings, scan_layout
 from closed_loop.simulation import SimSettings
 from conftest import SimWithSensors
-from closed_loop.world import load_world, moving_obstacle_xy, parse_world
+from closed_loop.obstacles import moving_obstacle_xy
+from closed_loop.world import load_world, parse_world
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
 DEG = math.pi / 180.0

@@ -5,9 +5,9 @@ import textwrap
 
 import pytest
 
+from closed_loop.obstacles import disk_overlaps, motion_path, moving_obstacle_xy
 from closed_loop.world import (NAMED_COLORS, ROBOT_CLEARANCE_RADIUS_M, Obstacle, Pose2D,
-                               WorldError, available_worlds, disk_overlaps, load_world,
-                               motion_path, moving_obstacle_xy, parse_world, resolve_world)
+                               WorldError, available_worlds, load_world, parse_world, resolve_world)
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
 SHIPPED = ('corridor', 'empty', 'obstacle_course', 'red_box', 'wall')
