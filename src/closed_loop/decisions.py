@@ -121,15 +121,17 @@ def speed_for_zone(zone, settings):
 
 @dataclasses.dataclass(frozen=True)
 class Decision:
-    """What to do: the zone, the forward speed (m/s) and a reason for the log."""
+    """What to do: the zone, the forward speed (m/s) and a reason for the log. ``fault``: the stop is for
+    want of usable input (no, stale or invalid scans), not for an obstacle."""
     zone: Zone
     linear_x: float
     reason: str
+    fault: bool = dataclasses.field(default=False, compare=False)
 
 
 def stop(reason):
-    """A STOP decision with zero speed and ``reason``."""
-    return Decision(Zone.STOP, 0.0, reason)
+    """A STOP decision with zero speed and ``reason``, for want of usable input (``fault``)."""
+    return Decision(Zone.STOP, 0.0, reason, fault=True)
 
 
 def input_problem(reading, reading_age_s, scan_timeout_s):

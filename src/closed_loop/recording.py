@@ -40,12 +40,12 @@ class RecordSettings:
     min_free_mb: int = param(1024, 'MiB', 'refuse to start, and fail while recording, when the folder\'s '
                              'disk has less free space than this (rosbag stops writing under 1 GiB)',
                              minimum=1)
-    extra_topics: str = param('', '', 'more topics to record, separated by spaces')
+    topics: str = param('', '', 'more topics to record, separated by spaces')
 
     def check_together(self):
-        for topic in self.extra_topics.split():
+        for topic in self.topics.split():
             if not TOPIC_NAME.match(topic):
-                raise SettingsError('~extra_topics: expected ROS topic names separated by spaces, got %r'
+                raise SettingsError('~topics: expected ROS topic names separated by spaces, got %r'
                                     % (topic,))
         name = self.bag_name
         if not name or '/' in name or name in ('.', '..') or '\0' in name:
@@ -61,7 +61,7 @@ def bag_folder(settings):
 
 def topics(settings):
     """The topics to record, in order, without repeats."""
-    wanted = list(LOOP_TOPICS) + (list(IMAGE_TOPICS) if settings.images else []) + settings.extra_topics.split()
+    wanted = list(LOOP_TOPICS) + (list(IMAGE_TOPICS) if settings.images else []) + settings.topics.split()
     return list(dict.fromkeys(wanted))
 
 

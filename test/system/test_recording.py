@@ -81,3 +81,20 @@ def test_too_little_free_space_ends_the_launch(tmp_path):
     # roslaunch's own status stays 0 when a required node dies (ROS 1); the launch ends, and says why.
     assert 'recording failed' in out and 'MiB free' in out and str(tmp_path / 'bags') in out, out
     assert 'REQUIRED process [record' in out, out
+
+
+def test_demo_recording_holds_the_mode_and_the_stop_is_logged_once(tmp_path):
+    code, out = run_demo(tmp_path, 'record:=true', 'bag_dir:=%s' % (tmp_path / 'bags'), 'bag_name:=demo',
+                         'camera:=false', seconds=25)
+    assert code == 0, out
+    bags = glob.glob(str(tmp_path / 'bags' / 'demo_*.bag'))
+    assert len(bags) == 1, os.listdir(tmp_path / 'bags')
+    with rosbag.Bag(bags[0]) as bag:
+        modes = [m.data for _, m, _ in bag.read_messages(topics=['/stop_on_obstacle/mode'])]
+        counts = [m.data for _, m, _ in bag.read_messages(topics=['/contact_count'])]
+    assert modes and modes[-1] == 'STOP', modes
+    assert counts and counts[-1] == 0, counts
+    # Standing at the wall is the normal end state: one line on entry, none repeated every 2 s.
+    log = open(os.path.join(ROOT, 'test_output', 'demo.log')).read()
+    assert log.count('-> STOP') == 1, [line for line in log.splitlines() if 'STOP' in line]
+    assert 'stopped:' not in log

@@ -26,13 +26,13 @@ def test_default_limits_are_in_the_argv():
 
 def test_topics_images_and_extras():
     assert '/camera/image_raw' not in recording.topics(settings(images=False))
-    assert recording.topics(settings(extra_topics='/a  b/c /cmd_vel'))[-2:] == ['/a', 'b/c']
+    assert recording.topics(settings(topics='/a  b/c /cmd_vel'))[-2:] == ['/a', 'b/c']
     assert '/contact_count' in recording.topics(settings())
 
 
 @pytest.mark.parametrize('values, field', [
-    ({'extra_topics': '--all'}, '~extra_topics'),
-    ({'extra_topics': '/ok -O'}, '~extra_topics'),
+    ({'topics': '--all'}, '~topics'),
+    ({'topics': '/ok -O'}, '~topics'),
     ({'bag_name': 'a/b'}, '~bag_name'),
     ({'bag_name': ''}, '~bag_name'),
     ({'bag_dir': ''}, '~bag_dir'),

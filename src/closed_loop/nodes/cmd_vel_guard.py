@@ -11,7 +11,7 @@ from std_msgs.msg import String
 from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import LOG_PERIOD_S, init_node, load_settings
+from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -154,13 +154,12 @@ class CmdVelGuard:
     def _send(self, v, w, verdict, reason):
         self.cmd_pub.publish(twist(v, w))
         self._sent = (v, w)
+        # Each verdict is logged once, on entry, with its reason: a robot held at a wall is a standing state.
         if verdict != self._verdict:
             log = rospy.loginfo if verdict == Verdict.PASS else rospy.logwarn
             log('%s -> %s: %s', self._verdict.name if self._verdict is not None else '-', verdict.name, reason)
             self._verdict = verdict
             self.verdict_pub.publish(String(data=verdict.name))
-        elif verdict == Verdict.VETOED:
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'VETOED: %s', reason)
 
 
 def main():

@@ -84,10 +84,11 @@ class FrontController:
         raise NotImplementedError
 
     # -- shared ---------------------------------------------------------------------------------------------
-    def publish_mode(self, mode, why):
-        """Publish ``mode`` (an enum member) on ``~mode`` and log the change, if it is a change."""
+    def publish_mode(self, mode, why, log=rospy.loginfo):
+        """Publish ``mode`` (an enum member) on ``~mode`` and log the change once with ``log``, if it is a
+        change; a standing mode is not logged again."""
         if mode != self.mode:
-            rospy.loginfo('mode %s -> %s: %s', self.mode.name if self.mode is not None else '-', mode.name, why)
+            log('mode %s -> %s: %s', self.mode.name if self.mode is not None else '-', mode.name, why)
             self.mode = mode
             self._mode_pub.publish(String(data=mode.name))
 

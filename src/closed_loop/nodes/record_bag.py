@@ -27,7 +27,7 @@ class RecordBag:
 
     Parameters: see :class:`closed_loop.recording.RecordSettings` (``~bag_dir``, ``~bag_name``,
     ``~images``, ``~compress``, ``~split_size_mb``, ``~max_splits``, ``~duration`` s, ``~min_free_mb``,
-    ``~extra_topics``).
+    ``~topics``).
     """
 
     def __init__(self):

@@ -66,8 +66,11 @@ class StopOnObstacle(FrontController):
     def _publish(self, decision):
         """Publish ``decision`` (call with the lock held)."""
         self.cmd_pub.publish(twist(decision.linear_x, 0.0))
-        self.publish_mode(decision.zone, decision.reason)
-        if decision.zone == Zone.STOP:
+        # Stopping is a warning, logged once on entry: standing at the wall is the normal end state. A stop
+        # for want of input (no, stale or invalid scans) is a fault and is repeated while it lasts.
+        self.publish_mode(decision.zone, decision.reason,
+                          rospy.logwarn if decision.zone == Zone.STOP else rospy.loginfo)
+        if decision.fault:
             rospy.logwarn_throttle(LOG_PERIOD_S, 'stopped: %s', decision.reason)
 
 
