@@ -23,9 +23,8 @@ import os
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
-import yaml
-
 from closed_loop.obstacles import disk_overlaps, footprint_overlaps
+from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
 
 #: The robot as seen by the start-pose check when its footprint is not known (a world checked on its
 #: own): a disk of this radius (m) around base_footprint. With the robot's footprint (the simulator
@@ -38,8 +37,6 @@ START_MARGIN_M = 0.05
 #: obstacles. A world at the limits loads in about 2 s.
 MAX_WORLD_FILE_BYTES = 1024 * 1024
 MAX_OBSTACLES = 2000
-#: At most this many characters of an offending value are quoted in an error message.
-MAX_QUOTE_CHARS = 120
 
 DEFAULT_GROUND_COLOR = (0.55, 0.55, 0.55, 1.0)
 DEFAULT_OBSTACLE_COLOR = (0.5, 0.5, 0.5, 1.0)
@@ -75,34 +72,13 @@ _OBSTACLE_KEYS = {
     'wall': _COMMON_OBSTACLE_KEYS + ('start', 'end', 'thickness', 'height'),
 }
 
-# Marks a required key that is absent, so messages can say so instead of printing a value.
-_MISSING = object()
-
-
-class WorldError(ValueError):
+class WorldError(FileError):
     """A world file (or world name) is unusable.
 
-    The message reads ``"<file>: <field path>: expected <what>, got <value!r>"``, for example
-    ``"worlds/wall.yaml: obstacles[0].size: expected 3 numbers > 0 (m), got [0.1, 4.0]"``.
-    The parts are kept as attributes ``source``, ``field``, ``expected`` and ``got`` (the
-    offending value, or None when the field is missing).
+    The message reads ``"<file>: <field path>: expected <what>, got <value>"``, for example
+    ``"worlds/wall.yaml: obstacles[0].size: expected 3 numbers > 0 (m), got [0.1, 4.0]"``, on one line
+    and quoting at most a short excerpt (:class:`closed_loop.yaml_check.FileError`).
     """
-
-    def __init__(self, source, field, expected, got=_MISSING):
-        self.source = source
-        self.field = field
-        self.expected = expected
-        self.got = None if got is _MISSING else got
-        told = 'nothing (the key is missing)' if got is _MISSING else quote(got)
-        super().__init__('%s: %s: expected %s, got %s' % (source, field, expected, told))
-
-
-def quote(value, limit=MAX_QUOTE_CHARS):
-    """``repr(value)`` on one line, cut to ``limit`` characters with the total length said."""
-    text = repr(value)
-    if len(text) <= limit:
-        return text
-    return '%s... (%d characters in all)' % (text[:limit], len(text))
 
 
 @dataclass(frozen=True)
@@ -154,93 +130,13 @@ class World:
     obstacles: Tuple[Obstacle, ...]
 
 
-# --- YAML reading ------------------------------------------------------------------------------
+# --- parsing -----------------------------------------------------------------------------------
 
-_MERGE_TAG = 'tag:yaml.org,2002:merge'
-
-
-class _StrictLoader(yaml.SafeLoader):
-    """PyYAML's safe loader, except that a key repeated in one mapping is an error.
-
-    PyYAML keeps the last of two equal keys without a word, which hides typos such as an obstacle
-    given two ``position`` lines.
-    """
-
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
-            seen = set()
-            for key_node, _ in node.value:
-                # Merge keys (<<) may legitimately repeat keys; only literal keys are checked.
-                if not isinstance(key_node, yaml.ScalarNode) or key_node.tag == _MERGE_TAG:
-                    continue
-                key = self.construct_object(key_node, deep=True)
-                if key in seen:
-                    raise yaml.constructor.ConstructorError(
-                        'while constructing a mapping', node.start_mark,
-                        'found duplicate key %r' % (key,), key_node.start_mark)
-                seen.add(key)
-        return super().construct_mapping(node, deep=deep)
-
-
-def _load_yaml(text, source):
-    """Parse YAML ``text``; a syntax error becomes a WorldError naming ``source`` and the line."""
-    try:
-        return yaml.load(text, Loader=_StrictLoader)
-    except yaml.MarkedYAMLError as error:
-        mark = error.problem_mark or error.context_mark
-        where = 'line %d, column %d' % (mark.line + 1, mark.column + 1) if mark else 'somewhere'
-        problem = error.problem or error.context or 'a syntax error'
-        if error.context and error.context_mark and error.context_mark is not mark:
-            # The start of the unclosed bracket or block is often the real culprit.
-            problem = '%s (%s started on line %d)' % (problem, error.context,
-                                                      error.context_mark.line + 1)
-        raise WorldError(source, where, 'valid YAML', problem) from None
-    except yaml.YAMLError as error:
-        raise WorldError(source, '(file)', 'valid YAML', str(error)) from None
-
-
-# --- field checks ------------------------------------------------------------------------------
-
-class _Checker:
-    """Field checks that all report errors against one source file."""
+class _WorldChecker(Checker):
+    """The generic field checks, errors as WorldError, plus colours."""
 
     def __init__(self, source):
-        self.source = source
-
-    def fail(self, field, expected, got=_MISSING):
-        raise WorldError(self.source, field, expected, got)
-
-    def mapping(self, value, field, allowed):
-        """``value`` must be a mapping whose keys are all in ``allowed``."""
-        if not isinstance(value, dict):
-            self.fail(field, 'a mapping', value)
-        for key in value:
-            if key not in allowed:
-                sub = '%s.%s' % (field, key) if field != '(top level)' else str(key)
-                self.fail(sub, 'a known key (%s)' % ', '.join(allowed), key)
-        return value
-
-    def number(self, value, field, what='a finite number', positive=False):
-        """A finite int or float (not a bool, not a string), as float; ``positive``: also > 0."""
-        number = _finite_float(value)
-        if number is None or (positive and not number > 0.0):
-            self.fail(field, what, value)
-        return number
-
-    def string(self, value, field):
-        if not isinstance(value, str) or not value.strip():
-            self.fail(field, 'a non-empty string', value)
-        return value
-
-    def numbers(self, value, field, counts, what, positive=False):
-        """A list of ``counts`` (a tuple of allowed lengths) numbers, as a tuple of floats."""
-        if not isinstance(value, (list, tuple)) or len(value) not in counts:
-            self.fail(field, what, value)
-        numbers = tuple(_finite_float(item) for item in value)
-        # Report the whole list: "got [1.0, nan]" is clearer than an index into it.
-        if any(n is None or (positive and not n > 0.0) for n in numbers):
-            self.fail(field, what, value)
-        return numbers
+        Checker.__init__(self, source, WorldError)
 
     def color(self, value, field):
         """``[r, g, b, a]`` each in [0, 1], or a name from NAMED_COLORS."""
@@ -255,32 +151,6 @@ class _Checker:
         return rgba
 
 
-def _finite_float(value):
-    """``value`` as a float if it is a finite int or float, else None.
-
-    Booleans are refused although Python counts them as ints (``size: [true, 1, 1]`` is a typo,
-    not 1.0), and so are strings: YAML 1.1 reads ``1e3`` (no dot) as a string.
-    """
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        return None
-    try:
-        number = float(value)
-    except OverflowError:
-        return None
-    return number if math.isfinite(number) else None
-
-
-def _get(checker, data, key, field, default=_MISSING):
-    """``data[key]``, or ``default``; a missing required key (no default) is an error."""
-    if key in data:
-        return data[key]
-    if default is _MISSING:
-        checker.fail(field, 'a value for the required key %r' % key)
-    return default
-
-
-# --- parsing -----------------------------------------------------------------------------------
-
 def parse_world(data, source='<string>', footprint=None):
     """Validate an already-loaded YAML object and return a :class:`World`.
 
@@ -292,9 +162,9 @@ def parse_world(data, source='<string>', footprint=None):
     y_min, y_max in m, e.g. :class:`closed_loop.robot_model.Footprint`) grown by ``START_MARGIN_M``,
     or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M``.
     """
-    check = _Checker(source)
+    check = _WorldChecker(source)
     top = check.mapping(data, '(top level)', _TOP_KEYS)
-    name = check.string(_get(check, top, 'name', 'name'), 'name')
+    name = check.string(check.get(top, 'name', 'name'), 'name')
     description = top.get('description', '')
     if not isinstance(description, str):
         check.fail('description', 'a string', description)
@@ -351,8 +221,8 @@ def parse_world(data, source='<string>', footprint=None):
 
 def _parse_start(check, value, field):
     start = check.mapping(value, field, _START_KEYS)
-    x = check.number(_get(check, start, 'x', field + '.x'), field + '.x', 'a finite number (m)')
-    y = check.number(_get(check, start, 'y', field + '.y'), field + '.y', 'a finite number (m)')
+    x = check.number(check.get(start, 'x', field + '.x'), field + '.x', 'a finite number (m)')
+    y = check.number(check.get(start, 'y', field + '.y'), field + '.y', 'a finite number (m)')
     yaw = check.number(start.get('yaw', 0.0), field + '.yaw', 'a finite number (rad)')
     return Pose2D(x, y, yaw)
 
@@ -361,14 +231,14 @@ def _parse_obstacle(check, raw, field):
     if not isinstance(raw, dict):
         check.fail(field, 'a mapping (an obstacle)', raw)
     # The type decides which keys are allowed, so it is checked first.
-    kind = _get(check, raw, 'type', field + '.type')
+    kind = check.get(raw, 'type', field + '.type')
     if kind not in OBSTACLE_TYPES:
         check.fail(field + '.type', 'one of %s' % ', '.join(OBSTACLE_TYPES), kind)
     if kind == 'wall' and 'motion' in raw:
         check.fail(field + '.motion', 'no motion on a wall (walls are static; use a box to move)',
                    raw['motion'])
     check.mapping(raw, field, _OBSTACLE_KEYS[kind])
-    name = check.string(_get(check, raw, 'name', field + '.name'), field + '.name')
+    name = check.string(check.get(raw, 'name', field + '.name'), field + '.name')
     color = DEFAULT_OBSTACLE_COLOR
     if 'color' in raw:
         color = check.color(raw['color'], field + '.color')
@@ -377,19 +247,19 @@ def _parse_obstacle(check, raw, field):
         return _parse_wall(check, raw, field, name, color)
 
     if kind == 'box':
-        size = check.numbers(_get(check, raw, 'size', field + '.size'), field + '.size', (3,),
+        size = check.numbers(check.get(raw, 'size', field + '.size'), field + '.size', (3,),
                              '[x, y, z]: 3 numbers > 0 (m, full extents)', positive=True)
         yaw = check.number(raw.get('yaw', 0.0), field + '.yaw', 'a finite number (rad)')
         radius = 0.0
     else:
-        radius = check.number(_get(check, raw, 'radius', field + '.radius'), field + '.radius',
+        radius = check.number(check.get(raw, 'radius', field + '.radius'), field + '.radius',
                               'a finite number > 0 (m)', positive=True)
-        height = check.number(_get(check, raw, 'height', field + '.height'), field + '.height',
+        height = check.number(check.get(raw, 'height', field + '.height'), field + '.height',
                               'a finite number > 0 (m)', positive=True)
         size = (2.0 * radius, 2.0 * radius, height)
         yaw = 0.0
 
-    xyz = check.numbers(_get(check, raw, 'position', field + '.position'), field + '.position',
+    xyz = check.numbers(check.get(raw, 'position', field + '.position'), field + '.position',
                         (2, 3), '[x, y] or [x, y, z]: finite numbers (m)')
     position = xyz if len(xyz) == 3 else (xyz[0], xyz[1], size[2] / 2.0)
 
@@ -403,9 +273,9 @@ def _parse_obstacle(check, raw, field):
 def _parse_wall(check, raw, field, name, color):
     """A wall is a box along its centre line from ``start`` to ``end``, standing on the ground."""
     point = '[x, y]: 2 finite numbers (m)'
-    start = check.numbers(_get(check, raw, 'start', field + '.start'), field + '.start', (2,),
+    start = check.numbers(check.get(raw, 'start', field + '.start'), field + '.start', (2,),
                           point)
-    end = check.numbers(_get(check, raw, 'end', field + '.end'), field + '.end', (2,), point)
+    end = check.numbers(check.get(raw, 'end', field + '.end'), field + '.end', (2,), point)
     thickness = check.number(raw.get('thickness', DEFAULT_WALL_THICKNESS_M), field + '.thickness',
                              'a finite number > 0 (m)', positive=True)
     height = check.number(raw.get('height', DEFAULT_WALL_HEIGHT_M), field + '.height',
@@ -421,7 +291,7 @@ def _parse_wall(check, raw, field, name, color):
 
 def _parse_motion(check, value, field, origin):
     motion = check.mapping(value, field, _MOTION_KEYS)
-    raw_points = _get(check, motion, 'waypoints', field + '.waypoints')
+    raw_points = check.get(motion, 'waypoints', field + '.waypoints')
     if not isinstance(raw_points, list) or not raw_points:
         check.fail(field + '.waypoints', 'a list of at least one point [x, y] (m)', raw_points)
     points = tuple(check.numbers(p, '%s.waypoints[%d]' % (field, i), (2,),
@@ -431,7 +301,7 @@ def _parse_motion(check, value, field, origin):
         # A path of zero length would make the obstacle silently static.
         check.fail(field + '.waypoints', 'at least one point away from the position %r'
                    % (list(origin),), raw_points)
-    speed = check.number(_get(check, motion, 'speed', field + '.speed'), field + '.speed',
+    speed = check.number(check.get(motion, 'speed', field + '.speed'), field + '.speed',
                          'a finite number > 0 (m/s)', positive=True)
     loop = motion.get('loop', True)
     if not isinstance(loop, bool):
@@ -449,23 +319,8 @@ def load_world(path, footprint=None):
     them) raise :class:`WorldError`, whose message is one line and quotes at most a short excerpt.
     """
     path = os.fspath(path)
-    try:
-        with open(path, 'r', encoding='utf-8') as stream:
-            size = os.fstat(stream.fileno()).st_size
-            if size > MAX_WORLD_FILE_BYTES:
-                raise WorldError(path, '(file)', 'a world file of at most %d bytes' % MAX_WORLD_FILE_BYTES,
-                                 '%d bytes' % size)
-            # One byte more than the limit tells a file that grows (or a pipe) from one that fits.
-            text = stream.read(MAX_WORLD_FILE_BYTES + 1)
-            if len(text.encode('utf-8')) > MAX_WORLD_FILE_BYTES:
-                raise WorldError(path, '(file)', 'a world file of at most %d bytes'
-                                 % MAX_WORLD_FILE_BYTES, 'more')
-    except OSError as error:
-        raise WorldError(path, '(file)', 'a readable world file',
-                         error.strerror or str(error)) from None
-    except UnicodeDecodeError as error:
-        raise WorldError(path, '(file)', 'UTF-8 text', str(error)) from None
-    return parse_world(_load_yaml(text, path), path, footprint)
+    text = read_text(path, MAX_WORLD_FILE_BYTES, WorldError, 'world file')
+    return parse_world(load_yaml(text, path, WorldError), path, footprint)
 
 
 def available_worlds(worlds_dir):

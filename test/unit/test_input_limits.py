@@ -4,14 +4,14 @@ import math
 import numpy
 import pytest
 
-from closed_loop import decisions, drive, robot_model, vision, world
+from closed_loop import decisions, drive, robot_model, vision, world, yaml_check
 from closed_loop.settings import MIN_RATE_HZ, SettingsError, check
 
 
 def test_a_long_value_is_quoted_as_an_excerpt():
-    text = world.quote('x' * 5000)
-    assert len(text) < world.MAX_QUOTE_CHARS + 40 and '5002 characters in all' in text
-    assert world.quote([1, 2]) == '[1, 2]'
+    text = yaml_check.quote('x' * 5000)
+    assert len(text) < yaml_check.MAX_QUOTE_CHARS + 40 and '5002 characters in all' in text
+    assert yaml_check.quote([1, 2]) == '[1, 2]'
 
 
 def test_a_text_file_as_world_is_one_short_line(tmp_path):
