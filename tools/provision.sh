@@ -11,7 +11,7 @@ APT_PACKAGES=(
   python3-rospy python3-rostest python3-rosbag python3-roslaunch python3-rosnode python3-rostopic
   python3-rosservice python3-rosparam python3-rosmsg python3-rosgraph-msgs python3-tf2-ros python3-tf2-msgs
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
-  python3-visualization-msgs
+  python3-visualization-msgs python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs
   librostest-dev rosout rosbash ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
 )

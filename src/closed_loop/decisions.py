@@ -37,7 +37,7 @@ class FrontControlSettings:
     """The ``~parameters`` every front-scan controller shares (stop_on_obstacle, state_machine_controller)."""
     front_half_angle: float = param(math.pi / 2.0, 'rad', 'half-width of the front sector, centred '
                                     'on 0 (forward)', minimum=0.0, maximum=math.pi,
-                                    exclusive_minimum=True)
+                                    exclusive_minimum=True, live=True)
     rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=MIN_RATE_HZ)
     scan_timeout: float = param(0.5, 's', 'stop when the newest scan is older than this (or none '
                                 'has arrived)', minimum=0.0, maximum=MAX_SCAN_TIMEOUT_S,
@@ -55,15 +55,15 @@ class FrontControlSettings:
 class StopSettings(FrontControlSettings):
     """stop_on_obstacle's ``~parameters``; defaults are the lesson's."""
     stop_distance: float = param(0.5, 'm', 'stop when the nearest obstacle ahead is closer than this',
-                                 minimum=0.0, exclusive_minimum=True)
+                                 minimum=0.0, exclusive_minimum=True, live=True)
     slow_distance: float = param(1.0, 'm', 'slow down when the nearest obstacle ahead is closer '
-                                 'than this', minimum=0.0, exclusive_minimum=True)
-    slow_speed: float = param(0.2, 'm/s', 'forward speed in the slow zone', minimum=0.0)
-    cruise_speed: float = param(0.5, 'm/s', 'forward speed when the way ahead is clear', minimum=0.0)
+                                 'than this', minimum=0.0, exclusive_minimum=True, live=True)
+    slow_speed: float = param(0.2, 'm/s', 'forward speed in the slow zone', minimum=0.0, live=True)
+    cruise_speed: float = param(0.5, 'm/s', 'forward speed when the way ahead is clear', minimum=0.0, live=True)
     hysteresis: float = param(0.05, 'm', 'leave a zone only once the distance exceeds its limit by '
-                              'this much', minimum=0.0)
+                              'this much', minimum=0.0, live=True)
     react_immediately: bool = param(True, '', 'act on a more dangerous scan at once from the scan '
-                                    "callback; false gives the lesson's timer-only design")
+                                    "callback; false gives the lesson's timer-only design", live=True)
 
     def check_together(self):
         if not self.stop_distance < self.slow_distance:

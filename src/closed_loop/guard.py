@@ -42,13 +42,13 @@ class Verdict(enum.IntEnum):
 class GuardSettings:
     """cmd_vel_guard's ``~parameters``."""
     safety_margin: float = param(0.10, 'm', 'least clearance kept between the footprint and any scan point '
-                                 'along the predicted path', minimum=0.04, maximum=2.0)
+                                 'along the predicted path', minimum=0.04, maximum=2.0, live=True)
     reaction_time: float = param(0.25, 's', 'how long a command is assumed followed before braking starts '
-                                 '(scan age, delivery and the next command)', minimum=0.0, maximum=2.0)
+                                 '(scan age, delivery and the next command)', minimum=0.0, maximum=2.0, live=True)
     braking_decel: float = param(2.0, 'm/s^2', "deceleration the base is counted on to brake at (at most "
-                                 "the base's own limit)", minimum=0.1, maximum=20.0)
+                                 "the base's own limit)", minimum=0.1, maximum=20.0, live=True)
     angular_decel: float = param(6.0, 'rad/s^2', 'yaw deceleration the base is counted on', minimum=0.1,
-                                 maximum=60.0)
+                                 maximum=60.0, live=True)
     rate_hz: float = param(20.0, 'Hz', 'watchdog rate: how often stale input is checked (wall clock)',
                            minimum=MIN_RATE_HZ)
     scan_timeout: float = param(0.5, 's', 'a scan older than this (or none) vetoes every motion',

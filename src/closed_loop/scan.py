@@ -190,12 +190,12 @@ class DetectorSettings:
     """obstacle_detector's ``~parameters``."""
     front_half_angle: float = param(math.pi / 2.0, 'rad',
                                     'half-width of the front sector, centred on 0 (forward)',
-                                    minimum=0.0, maximum=math.pi, exclusive_minimum=True)
+                                    minimum=0.0, maximum=math.pi, exclusive_minimum=True, live=True)
     side_half_angle: float = param(math.pi / 4.0, 'rad',
                                    'half-width of the left (+pi/2) and right (-pi/2) sectors',
-                                   minimum=0.0, maximum=math.pi, exclusive_minimum=True)
+                                   minimum=0.0, maximum=math.pi, exclusive_minimum=True, live=True)
     warn_distance: float = param(0.5, 'm', 'warn when the nearest obstacle is closer than this',
-                                 minimum=0.0, exclusive_minimum=True)
+                                 minimum=0.0, exclusive_minimum=True, live=True)
 
 
 def sector_readings(scan, settings, forward_rad=0.0):

@@ -20,11 +20,15 @@ class SettingsError(ValueError):
 
 
 def param(default, unit='', doc='', minimum=None, maximum=None, exclusive_minimum=False,
-          choices=None):
-    """A settings field: its default, unit, one-line meaning and the values it accepts."""
+          choices=None, live=False):
+    """A settings field: its default, unit, one-line meaning and the values it accepts.
+
+    ``live``: the node takes a new value while it runs (dynamic_reconfigure, ``closed_loop.reconfigure``);
+    the others (rates, timeouts, frames) are read once at start-up.
+    """
     return dataclasses.field(default=default, metadata={
         'unit': unit, 'doc': doc, 'minimum': minimum, 'maximum': maximum,
-        'exclusive_minimum': exclusive_minimum, 'choices': choices})
+        'exclusive_minimum': exclusive_minimum, 'choices': choices, 'live': live})
 
 
 def _coerce(name, kind, value):
@@ -87,6 +91,11 @@ def from_params(cls, get_param):
     for f in dataclasses.fields(cls):
         values[f.name] = get_param('~' + f.name, f.default)
     return check(cls(**values))
+
+
+def live_fields(cls):
+    """The fields of ``cls`` a running node takes new values of, in declaration order."""
+    return [f for f in dataclasses.fields(cls) if f.metadata.get('live')]
 
 
 def describe(cls):

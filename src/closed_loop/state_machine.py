@@ -32,11 +32,11 @@ class State(enum.Enum):
 class BackUpSettings(FrontControlSettings):
     """state_machine_controller's ``~parameters``; defaults are the lesson's."""
     trigger_distance: float = param(0.5, 'm', 'back up when the nearest obstacle ahead is closer than '
-                                    'this', minimum=0.0, exclusive_minimum=True)
-    explore_speed: float = param(0.5, 'm/s', 'forward speed while exploring', minimum=0.0)
-    backup_speed: float = param(-0.3, 'm/s', 'speed while backing up (negative: reverse)')
+                                    'this', minimum=0.0, exclusive_minimum=True, live=True)
+    explore_speed: float = param(0.5, 'm/s', 'forward speed while exploring', minimum=0.0, live=True)
+    backup_speed: float = param(-0.3, 'm/s', 'speed while backing up (negative: reverse)', live=True)
     backup_duration: float = param(2.0, 's', 'how long to back up', minimum=0.0,
-                                   exclusive_minimum=True)
+                                   exclusive_minimum=True, live=True)
 
     def check_together(self):
         if not self.backup_speed < 0.0:
@@ -84,6 +84,12 @@ class BackUpStateMachine:
         if self._entered_s is None:
             return 0.0
         return max(0.0, now_s - self._entered_s)
+
+    def reconfigure(self, settings):
+        # type: (BackUpSettings) -> None
+        """Go on with new settings: the state and the time it was entered stay; the next update judges
+        them by the new values (a shorter ``backup_duration`` may end BACKING_UP at once)."""
+        self._settings = settings
 
     def speed(self):
         """Forward speed (m/s) for the current state."""

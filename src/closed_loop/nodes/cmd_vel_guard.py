@@ -11,7 +11,7 @@ from std_msgs.msg import String
 from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import LiveSettings, init_node, load_settings
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -38,7 +38,8 @@ class CmdVelGuard:
         ``~verdict`` (std_msgs/String, latched): PASS, SLOWED or VETOED, on every change (logged with why).
     Parameters: see :class:`closed_loop.guard.GuardSettings` (``~safety_margin`` m, ``~reaction_time`` s,
         ``~braking_decel`` m/s^2, ``~angular_decel`` rad/s^2, ``~rate_hz``, ``~scan_timeout`` s,
-        ``~cmd_timeout`` s, ``~scan_frame``); ``robot_description`` (URDF text, required).
+        ``~cmd_timeout`` s, ``~scan_frame``); ``robot_description`` (URDF text, required). The margin,
+        reaction time and decelerations are live (dynamic_reconfigure).
     """
 
     def __init__(self):
@@ -74,7 +75,13 @@ class CmdVelGuard:
         self._cmd_sub = rospy.Subscriber('cmd_vel_in', Twist, self._on_cmd, queue_size=1)
         self._timer = rospy.Timer(rospy.Duration(1.0 / s.rate_hz), lambda _e: self._tick(), reset=True)
         self._watchdog.start()
+        self._live = LiveSettings(s, self._take_settings)
         rospy.on_shutdown(self._on_shutdown)
+
+    def _take_settings(self, settings):
+        # From dynamic_reconfigure: the next command or scan is judged by the new values.
+        with self.lock:
+            self.settings = settings
 
     # -- inputs ------------------------------------------------------------------------------------------
     def _on_scan(self, msg):

@@ -5,8 +5,9 @@ import tempfile
 
 import rospkg
 import rospy
+from dynamic_reconfigure.server import Server as ReconfigureServer
 
-from closed_loop import robot_model
+from closed_loop import reconfigure, robot_model
 from closed_loop.settings import SettingsError, from_params
 
 #: How often a repeated warning or error of a node may reappear in the log (s).
@@ -46,12 +47,59 @@ def init_node(name, **kwargs):
 
 
 def load_settings(cls):
-    """Read ``cls`` from the node's private parameters; on a bad value log it and exit with status 2."""
+    """Read ``cls`` from the node's private parameters; on a bad value log it and exit with status 2.
+
+    The effective values (defaults included, converted) are written back to the parameter server, so
+    ``rosparam get`` shows what the node runs with.
+    """
     try:
-        return from_params(cls, rospy.get_param)
+        settings = from_params(cls, rospy.get_param)
     except SettingsError as error:
         rospy.logfatal('%s: bad parameter %s', rospy.get_name(), error)
         sys.exit(2)
+    for name, value in vars(settings).items():
+        rospy.set_param('~' + name, value)
+    return settings
+
+
+class _Server(ReconfigureServer):
+    """dynamic_reconfigure's server, without its silent clamping: a value out of range reaches the
+    settings class's check and is refused with the reason, like any other bad value."""
+
+    def _clamp(self, config):
+        pass
+
+
+class LiveSettings:
+    """Serves the live fields of a node's settings (``closed_loop.reconfigure``) with dynamic_reconfigure,
+    in the node's namespace (``~set_parameters``, ``~parameter_descriptions``, ``~parameter_updates``), so
+    ``rosrun dynamic_reconfigure dynparam set /NODE NAME VALUE`` and rqt_reconfigure work.
+
+    A change is checked whole by the settings class; if it passes, ``apply(new_settings)`` is called (the
+    node swaps its settings under its own lock) and the new values go to the parameter server; if not, the
+    call is refused with the reason (``dynparam`` prints it), logged, and nothing changes.
+    """
+
+    def __init__(self, settings, apply):
+        self.settings = settings
+        self._apply = apply
+        self._started = False
+        self._server = _Server(reconfigure.config_type(type(settings), settings), self._on_request)
+
+    def _on_request(self, config, _level):
+        if not self._started:  # the server's own first call, with the values the node started with
+            self._started = True
+            return config
+        try:
+            new = reconfigure.changed(self.settings, config)
+        except SettingsError as error:
+            rospy.logwarn('reconfigure refused: %s', error)
+            raise rospy.ServiceException('refused: %s' % error)
+        old, self.settings = self.settings, new
+        self._apply(new)
+        rospy.loginfo('reconfigured: %s', reconfigure.differences(old, new) or 'no change')
+        config.update(reconfigure.live_values(new))
+        return config
 
 
 def stamp_to_sec(stamp):

@@ -9,7 +9,7 @@ from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
-from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist_from_command
 from closed_loop.scan import ScanError, sector_min
 from closed_loop.sources import SourceCheck
@@ -26,6 +26,10 @@ class FrontController:
     error names the publishers, and the controller stops (``closed_loop.sources.SourceCheck``); a timer on the ROS clock calls :meth:`control` every ``1 / ~rate_hz`` s. A wall-clock watchdog
     publishes zero while no scan has been received for ``~scan_timeout`` s of wall time, since a dead
     simulator stops ``/clock`` and with it the ROS-clock timer. Zero is also sent on shutdown.
+
+    The settings' live fields (thresholds, speeds, the sector's width) are served by dynamic_reconfigure
+    (:class:`closed_loop.nodes.common.LiveSettings`): ``dynparam set /NODE stop_distance 0.8`` takes effect
+    on the next scan; a change the settings class refuses (stop above slow) is refused with the reason.
 
     Parameters every front controller has (``closed_loop.decisions.FrontControlSettings``):
         ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around the robot's
@@ -65,6 +69,7 @@ class FrontController:
         # killing its thread.
         self._timer = rospy.Timer(rospy.Duration(period_s), lambda _event: self.control(), reset=True)
         self._watchdog.start()
+        self._live = LiveSettings(settings, self._apply_settings)
         rospy.on_shutdown(self._on_shutdown)
 
     # -- for subclasses ---------------------------------------------------------------------------------
@@ -83,7 +88,16 @@ class FrontController:
         """No scan for ``silent_s`` s of wall time: publish a stop (lock held)."""
         raise NotImplementedError
 
+    def on_settings(self, settings):
+        """New live settings were taken (lock held); ``self.settings`` is already the new one."""
+
     # -- shared ---------------------------------------------------------------------------------------------
+    def _apply_settings(self, settings):
+        # From dynamic_reconfigure: the next scan and the next tick decide with the new values.
+        with self.lock:
+            self.settings = settings
+            self.on_settings(settings)
+
     def publish_mode(self, mode, why, log=rospy.loginfo):
         """Publish ``mode`` (an enum member) on ``~mode`` and log the change once with ``log``, if it is a
         change; a standing mode is not logged again."""

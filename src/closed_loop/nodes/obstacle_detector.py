@@ -5,7 +5,7 @@ import rospy
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float32
 
-from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, init_node, load_settings
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
 from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
@@ -34,6 +34,7 @@ class ObstacleDetector:
         ``~side_half_angle`` (rad, default pi/4): half-width of the left and right sectors.
         ``~warn_distance`` (m, default 0.5): log a (throttled) warning when the nearest obstacle is
         closer than this.
+        All three are live (dynamic_reconfigure, :class:`closed_loop.nodes.common.LiveSettings`).
     """
 
     def __init__(self):
@@ -45,13 +46,19 @@ class ObstacleDetector:
         # Sectors turn with the laser's mounting on the robot (robot_description), per scan frame.
         self._mounting = LaserMounting()
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=SCAN_QUEUE_SIZE)
+        # Live settings: each scan reads self._settings once; swapping the reference is atomic.
+        self._live = LiveSettings(self._settings, self._take_settings)
+
+    def _take_settings(self, settings):
+        self._settings = settings
 
     def _on_scan(self, msg):
         # The output is the per-scan conversion itself, so it is published from the callback.
+        settings = self._settings
         try:
             scan = scan_from_msg(msg)
             overall = nearest(scan)
-            sectors = sector_readings(scan, self._settings, self._mounting.forward_rad(msg.header.frame_id))
+            sectors = sector_readings(scan, settings, self._mounting.forward_rad(msg.header.frame_id))
         except ScanError as error:
             rospy.logerr_throttle(LOG_PERIOD_S, 'scan rejected: %s', error)
             self._publish_all(math.nan, {name: math.nan for name in self._sector_pubs})
@@ -60,7 +67,7 @@ class ObstacleDetector:
                           {name: reading.distance_m for name, reading in sectors.items()})
         if not overall.trusted:
             rospy.logwarn_throttle(LOG_PERIOD_S, 'scan has %s', describe_reading(overall))
-        elif overall.distance_m < self._settings.warn_distance:
+        elif overall.distance_m < settings.warn_distance:
             rospy.logwarn_throttle(LOG_PERIOD_S, 'Obstacle close: %.2f m', overall.distance_m)
         else:
             rospy.logdebug_throttle(LOG_PERIOD_S, 'Clear: nearest obstacle %.2f m',

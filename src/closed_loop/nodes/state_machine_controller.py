@@ -44,6 +44,9 @@ class StateMachineController(FrontController):
         self._machine = BackUpStateMachine(self.settings, on_transition=self._on_transition)
         self.publish_mode(self._machine.state, 'start')
 
+    def on_settings(self, settings):
+        self._machine.reconfigure(settings)
+
     def react_now(self, reading, age_s):
         return react_now(self._machine.state, reading, self.settings)
 

@@ -1,0 +1,93 @@
+#!/usr/bin/env python3
+"""demo.launch in `wall`, changed while it runs with the stock tool (`rosrun dynamic_reconfigure dynparam`):
+the effective defaults are on the parameter server; stop above slow is refused with the reason and changes
+nothing; `stop_distance 0.8` set while the robot cruises far from the wall makes it rest 0.70-0.80 m from the
+wall (it rests 0.40-0.50 m at the default 0.5 m, loop_wall), judged on ground truth; the detector's
+threshold is live too."""
+import os
+import subprocess
+import sys
+import unittest
+
+import rospy
+import rostest
+from dynamic_reconfigure.client import Client
+from std_msgs.msg import UInt32
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import harness  # noqa: E402
+from closed_loop.decisions import StopSettings  # noqa: E402
+from closed_loop.scan import DetectorSettings  # noqa: E402
+
+WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/closed_loop.urdf)
+NEW_STOP_DISTANCE_M = 0.8
+# Past the new stop distance by at most this (braking from slow speed within one control period).
+STOP_BAND_M = 0.10
+CHANGE_BEFORE_CLEARANCE_M = 2.0   # the change is made while the wall is farther than this
+AT_REST_MPS = 0.01
+REST_FOR_S = 1.0
+TOOL_TIMEOUT_S = 30.0
+
+
+def dynparam(*args):
+    """Run the stock dynparam tool (argument list, no shell); return (exit status, output)."""
+    done = subprocess.run(['rosrun', 'dynamic_reconfigure', 'dynparam'] + list(args), stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, universal_newlines=True, timeout=TOOL_TIMEOUT_S)
+    return done.returncode, done.stdout
+
+
+class Reconfigure(unittest.TestCase):
+    def test_change_stop_distance_mid_run(self):
+        rospy.init_node('reconfigure_test')
+        truth = harness.GroundTruth()
+        contacts = harness.Latest('contact_count', UInt32)
+        defaults = StopSettings()
+        self.assertEqual(rospy.get_param('/stop_on_obstacle/stop_distance'), defaults.stop_distance)
+        self.assertEqual(rospy.get_param('/stop_on_obstacle/scan_timeout'), defaults.scan_timeout)
+        self.assertEqual(rospy.get_param('/obstacle_detector/warn_distance'), DetectorSettings().warn_distance)
+
+        # Wait until it cruises, still far from the wall.
+        truth.wait(predicate=lambda m: m.twist.twist.linear.x > 0.3)
+        self.assertGreater(WALL_NEAR_FACE_X_M - truth.xy()[0], CHANGE_BEFORE_CLEARANCE_M)
+
+        status, out = dynparam('set', '/stop_on_obstacle', 'stop_distance', '1.5')
+        self.assertNotEqual(status, 0, 'stop above slow was accepted:\n' + out)
+        self.assertIn('expected more than stop_distance', out)
+        client = Client('/stop_on_obstacle', timeout=TOOL_TIMEOUT_S)
+        self.assertEqual(client.get_configuration(TOOL_TIMEOUT_S)['stop_distance'], defaults.stop_distance)
+
+        status, out = dynparam('set', '/stop_on_obstacle', 'stop_distance', str(NEW_STOP_DISTANCE_M))
+        self.assertEqual(status, 0, out)
+        self.assertGreater(WALL_NEAR_FACE_X_M - truth.xy()[0], defaults.slow_distance,
+                           'the change came too late to show')
+        status, out = dynparam('get', '/stop_on_obstacle')
+        self.assertEqual(status, 0, out)
+        self.assertIn("'stop_distance': %r" % NEW_STOP_DISTANCE_M, out)
+        self.assertEqual(rospy.get_param('/stop_on_obstacle/stop_distance'), NEW_STOP_DISTANCE_M)
+
+        # Rest: ground truth at rest for REST_FOR_S of simulated time.
+        rest_since = None
+        while not rospy.is_shutdown():
+            m = truth.wait()
+            t = m.header.stamp.to_sec()
+            if abs(m.twist.twist.linear.x) < AT_REST_MPS and truth.xy()[0] > 1.0:
+                rest_since = t if rest_since is None else rest_since
+                if t - rest_since >= REST_FOR_S:
+                    break
+            else:
+                rest_since = None
+            rospy.sleep(0.1)
+        clearance = WALL_NEAR_FACE_X_M - truth.xy()[0]
+        self.assertTrue(NEW_STOP_DISTANCE_M - STOP_BAND_M <= clearance <= NEW_STOP_DISTANCE_M,
+                        'rested %.3f m from the wall, expected %.2f-%.2f m'
+                        % (clearance, NEW_STOP_DISTANCE_M - STOP_BAND_M, NEW_STOP_DISTANCE_M))
+        self.assertEqual(contacts.wait().data, 0)
+
+        # The detector's threshold is live as well.
+        detector = Client('/obstacle_detector', timeout=TOOL_TIMEOUT_S)
+        self.assertEqual(detector.update_configuration({'warn_distance': 0.9})['warn_distance'], 0.9)
+        self.assertEqual(rospy.get_param('/obstacle_detector/warn_distance'), 0.9)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('closed_loop', 'reconfigure', Reconfigure)
