@@ -252,6 +252,23 @@ class Simulation:
                            computeForwardKinematics=True)
         return Pose3D(tuple(state[4]), tuple(state[5]))
 
+    def obstacle_positions(self):
+        """[(obstacle, (x, y, z) of its centre now)] for every obstacle of the world, in the world's order:
+        a moving one where its path has taken it (the pose the physics has), a static one where it stands."""
+        moved = {obstacle.name: uid for uid, (obstacle, _, _) in self._movers.items()}
+        out = []
+        for obstacle in self.world.obstacles:
+            if obstacle.name in moved:
+                position, _ = self._call(pybullet.getBasePositionAndOrientation, moved[obstacle.name])
+                out.append((obstacle, tuple(position)))
+            else:
+                out.append((obstacle, tuple(obstacle.position)))
+        return out
+
+    @property
+    def has_moving_obstacles(self):
+        return bool(self._movers)
+
     def commanded_twist(self):
         """The ramped twist the wheels are being driven at."""
         return self._twist

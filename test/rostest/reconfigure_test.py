@@ -42,6 +42,9 @@ class Reconfigure(unittest.TestCase):
         truth = harness.GroundTruth()
         contacts = harness.Latest('contact_count', UInt32)
         defaults = StopSettings()
+        # A node serves ~set_parameters once it has written its effective parameters.
+        for node in ('/stop_on_obstacle', '/obstacle_detector'):
+            rospy.wait_for_service(node + '/set_parameters', timeout=harness.WAIT_FOR_TOPIC_S)
         self.assertEqual(rospy.get_param('/stop_on_obstacle/stop_distance'), defaults.stop_distance)
         self.assertEqual(rospy.get_param('/stop_on_obstacle/scan_timeout'), defaults.scan_timeout)
         self.assertEqual(rospy.get_param('/obstacle_detector/warn_distance'), DetectorSettings().warn_distance)

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """demo.launch rviz:=true in a real rviz on a virtual screen (Xvfb): once the robot has moved, a screenshot
-shows the scan points (magenta, rviz/closed_loop.rviz), the robot model (its URDF blue) in the 3D view and
-a camera image that is not blank (the red box, outside the 3D view); the launch log has no error.
+shows the scan points (magenta, rviz/closed_loop.rviz), the robot model (its URDF blue) and the red box itself
+(world_markers, in the world frame that TF joins to odom) in the 3D view and a camera image that is not blank (the red box, outside the 3D view); the launch log has no error.
 Skipped, with the reason, only where Xvfb cannot start."""
 import os
 import re
@@ -73,6 +73,8 @@ class RvizDisplay(unittest.TestCase):
         self.assertGreater(int((magenta & inside).sum()), MIN_PIXELS, 'no scan points in the 3D view')
         self.assertGreater(int((blue & inside).sum()), MIN_PIXELS, 'no robot model in the 3D view')
         self.assertGreater(int((red & ~inside).sum()), MIN_PIXELS, 'the camera panel shows no red box')
+        # The world itself (world_markers), not only the scan: the red box is drawn in the 3D view.
+        self.assertGreater(int((red & inside).sum()), MIN_PIXELS, 'no red box (world_markers) in the 3D view')
 
         bad = [line.strip() for line in text.splitlines() if BAD_LOG.search(line)]
         self.assertEqual(bad, [], 'errors in the demo log (%s)' % log_path)

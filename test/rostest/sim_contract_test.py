@@ -9,15 +9,18 @@ import time
 
 import rospy
 import rostest
+import tf2_ros
 from std_srvs.srv import Empty
 from geometry_msgs.msg import Twist
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import UInt32
+from visualization_msgs.msg import Marker, MarkerArray
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
 from closed_loop.simulation import SimSettings  # noqa: E402
+from closed_loop.world import load_world  # noqa: E402
 
 WALL_NEAR_FACE_X_M = 3.0        # worlds/wall.yaml
 WALL_HALF_SPAN_Y_M = 2.0
@@ -131,6 +134,35 @@ class SimContract(unittest.TestCase):
         harness.sim_sleep(0.2)
         x, y = self.truth.xy()
         self.assertLess(abs(x) + abs(y), 0.01, 'reset_world left the robot at (%.3f, %.3f)' % (x, y))
+
+
+    def test_7_world_markers_and_world_frame_in_tf(self):
+        wall = load_world(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'worlds',
+                                       'wall.yaml'))
+        markers = harness.Latest('world_markers', MarkerArray).wait().markers
+        self.assertEqual(markers[0].action, Marker.DELETEALL)
+        shown = markers[1:]
+        self.assertEqual([m.id for m in shown], list(range(len(wall.obstacles))))
+        for m, obstacle in zip(shown, wall.obstacles):
+            self.assertEqual((m.header.frame_id, m.type, m.action), ('world', Marker.CUBE, Marker.ADD))
+            p = m.pose.position
+            self.assertEqual((p.x, p.y, p.z), obstacle.position)
+            self.assertEqual((m.scale.x, m.scale.y, m.scale.z), obstacle.size)
+            for got, want in zip((m.color.r, m.color.g, m.color.b, m.color.a), obstacle.color):
+                self.assertAlmostEqual(got, want, places=6)   # std_msgs/ColorRGBA is float32
+        # Drive a little so odometry and ground truth differ from the start; world -> base_footprint
+        # through odom must then be the ground truth.
+        self._publish_for(harness.twist(0.3, 0.4), 1.0)
+        buffer = tf2_ros.Buffer()
+        tf2_ros.TransformListener(buffer)
+        harness.sim_sleep(CMD_VEL_TIMEOUT_S + 1.0)   # at rest: the two are compared at one pose
+        t = buffer.lookup_transform('world', 'base_footprint', rospy.Time(0), rospy.Duration(5.0))
+        truth = self.truth.wait()
+        x, y = t.transform.translation.x, t.transform.translation.y
+        tx, ty = truth.pose.pose.position.x, truth.pose.pose.position.y
+        self.assertGreater(math.hypot(tx, ty), 0.1)
+        self.assertLess(math.hypot(x - tx, y - ty), 0.01, 'TF world -> base_footprint (%.3f, %.3f) is not the '
+                        'ground truth (%.3f, %.3f)' % (x, y, tx, ty))
 
 
 if __name__ == '__main__':

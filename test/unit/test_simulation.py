@@ -490,3 +490,35 @@ def test_robot_model_reads_its_dimensions_from_the_urdf():
     assert model.wheel_radius_m == pytest.approx(0.05)
     assert model.wheel_separation_m == pytest.approx(0.28)
     assert model.scan_to_front_m == pytest.approx(0.15)
+
+
+# --- the world view (world_markers) -----------------------------------------------------------------
+
+def test_world_view_sends_a_static_world_once_and_again_after_a_reset(make_sim):
+    from closed_loop.sensors.world_state import WorldState
+    sim = make_sim(world('corridor'))
+    view = sim.rig.sensors[WorldState]
+    first = view.sample(sim.rig.sim)
+    assert first.news
+    assert [o.name for o, _ in first.obstacles] == [o.name for o in sim.world.obstacles]
+    assert all(position == o.position for o, position in first.obstacles)
+    run(sim, 0.5)
+    assert not view.sample(sim.rig.sim).news
+    assert view.sample(sim.rig.sim).obstacles == ()
+    sim.reset_world()
+    assert view.sample(sim.rig.sim).news
+
+
+def test_world_view_follows_moving_obstacles(make_sim):
+    from closed_loop.sensors.world_state import WorldState
+    sim = make_sim(slider_world())
+    view = sim.rig.sensors[WorldState]
+    slider = sim.world.obstacles[0]
+    for seconds in (0.0, 1.0, 1.5):
+        run(sim, seconds)
+        reading = view.sample(sim.rig.sim)
+        assert reading.news
+        (obstacle, (x, y, z)), = reading.obstacles
+        assert obstacle is slider
+        assert (x, y) == pytest.approx(moving_obstacle_xy(slider, sim.time_s), abs=1e-6)
+        assert z == pytest.approx(slider.position[2])

@@ -12,12 +12,16 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
 from std_msgs.msg import String, UInt32
 from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import Marker, MarkerArray
 
 from closed_loop import image_encoding
 from closed_loop.geometry import yaw_quaternion
 
 ODOM_FRAME = 'odom'
 WORLD_FRAME = 'world'
+#: world_markers: marker type per obstacle shape (closed_loop.shapes.SHAPES), and the namespace.
+MARKER_TYPES = {'box': Marker.CUBE, 'cylinder': Marker.CYLINDER}
+WORLD_MARKER_NS = 'world'
 # A small diagonal covariance for odometry (m^2, rad^2), so consumers that weigh it do not divide by 0.
 ODOM_POSE_VARIANCE = 1e-3
 ODOM_TWIST_VARIANCE = 1e-3
@@ -60,7 +64,8 @@ def camera_messages(node, camera, rgb, stamp):
 
 
 def odometry_messages(node, _odometry, reading, stamp):
-    """nav_msgs/Odometry odom -> base frame and its TF; the ground truth in frame ``world``."""
+    """nav_msgs/Odometry odom -> base frame and its TF, with world -> odom; the ground truth in frame
+    ``world``."""
     out = []
     base = node.settings.base_frame
     if node.wanted('odom') or node.wanted('/tf'):
@@ -81,7 +86,7 @@ def odometry_messages(node, _odometry, reading, stamp):
         tf.child_frame_id = base
         tf.transform.translation.x, tf.transform.translation.y = reading.x, reading.y
         tf.transform.rotation = odom.pose.pose.orientation
-        out += [('odom', odom), ('/tf', TFMessage([tf]))]
+        out += [('odom', odom), ('/tf', TFMessage([world_to_odom(reading, stamp), tf]))]
     if node.wanted('base_pose_ground_truth'):
         pose, (linear, angular) = reading.truth_pose, reading.truth_velocity
         truth = Odometry()
@@ -99,6 +104,45 @@ def odometry_messages(node, _odometry, reading, stamp):
         truth.twist.twist.angular.z = angular[2]
         out.append(('base_pose_ground_truth', truth))
     return out
+
+
+def world_to_odom(reading, stamp):
+    """TF world -> odom from the ground truth and the odometry: where odometry's origin lies in the world
+    (the start pose, moved by whatever odometry has drifted), so ground truth and odom share one tree."""
+    truth_x, truth_y, _ = reading.truth_pose.position
+    yaw = reading.truth_pose.yaw - reading.yaw
+    c, s = math.cos(yaw), math.sin(yaw)
+    tf = TransformStamped()
+    tf.header.stamp = stamp
+    tf.header.frame_id = WORLD_FRAME
+    tf.child_frame_id = ODOM_FRAME
+    tf.transform.translation.x = truth_x - (c * reading.x - s * reading.y)
+    tf.transform.translation.y = truth_y - (s * reading.x + c * reading.y)
+    tf.transform.rotation = Quaternion(*yaw_quaternion(yaw))
+    return tf
+
+
+def world_messages(_node, _world, reading, stamp):
+    """visualization_msgs/MarkerArray of every obstacle in frame ``world``, in its colour, led by a
+    DELETEALL (so markers of an earlier world do not linger); nothing when the reading is no news. Marker
+    ``id`` i is the world file's obstacle i (rviz warns about a text on a shape, so the name is not sent)."""
+    if not reading.news:
+        return []
+    clear = Marker(action=Marker.DELETEALL, ns=WORLD_MARKER_NS)
+    clear.header.frame_id = WORLD_FRAME
+    clear.header.stamp = stamp
+    clear.pose.orientation.w = 1.0
+    markers = [clear]
+    for marker_id, (obstacle, position) in enumerate(reading.obstacles):
+        m = Marker(ns=WORLD_MARKER_NS, id=marker_id, type=MARKER_TYPES[obstacle.shape], action=Marker.ADD)
+        m.header.frame_id = WORLD_FRAME
+        m.header.stamp = stamp
+        m.pose.position.x, m.pose.position.y, m.pose.position.z = position
+        m.pose.orientation = Quaternion(*yaw_quaternion(obstacle.yaw))
+        m.scale.x, m.scale.y, m.scale.z = obstacle.size
+        m.color.r, m.color.g, m.color.b, m.color.a = obstacle.color
+        markers.append(m)
+    return [('world_markers', MarkerArray(markers=markers))]
 
 
 def joint_messages(_node, _wheels, reading, stamp):

@@ -14,6 +14,7 @@ from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
 from std_msgs.msg import String, UInt32
 from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
+from visualization_msgs.msg import MarkerArray
 
 from closed_loop import drive, robot_model, world as world_mod
 from closed_loop.nodes import sensor_messages as to_msgs
@@ -25,6 +26,7 @@ from closed_loop.sensors.contacts import Contacts
 from closed_loop.sensors.lidar import Lidar
 from closed_loop.sensors.odometry import Odometry as OdometrySensor
 from closed_loop.sensors.wheels import WheelEncoders
+from closed_loop.sensors.world_state import WorldState
 from closed_loop.simulation import SimSettings, Simulation
 from closed_loop.sources import SourceCheck
 
@@ -43,6 +45,7 @@ SENSORS = (
     SensorLine(Lidar, (('scan', LaserScan, 5, False),), to_msgs.scan_messages, False, True),
     SensorLine(Camera, (('camera/image_raw', Image, 2, False), ('camera/camera_info', CameraInfo, 2, False)),
                to_msgs.camera_messages, True, True),
+    SensorLine(WorldState, (('world_markers', MarkerArray, 1, True),), to_msgs.world_messages, False, False),
 )
 # How far behind the wall clock the loop may fall before it stops trying to catch up.
 MAX_LAG_S = 0.25
@@ -72,8 +75,11 @@ class SimNode:
         scan (sensor_msgs/LaserScan): frame base_scan; REP 117 (+inf no return, -inf closer than range_min).
         camera/image_raw (sensor_msgs/Image, rgb8) and camera/camera_info (sensor_msgs/CameraInfo),
             frame camera_optical_frame; off with ``~camera:=false``.
-        odom (nav_msgs/Odometry): odom -> base_footprint from the wheels; also as TF on tf.
+        odom (nav_msgs/Odometry): odom -> base_footprint from the wheels; also as TF on tf, with
+            world -> odom (from the ground truth), so ``world`` is the root of the TF tree.
         base_pose_ground_truth (nav_msgs/Odometry): the true pose of base_footprint in frame ``world``.
+        world_markers (visualization_msgs/MarkerArray, latched): every obstacle in frame ``world``, in its
+            colour; once, or at ``~world_markers_rate_hz`` while obstacles move.
         joint_states (sensor_msgs/JointState): the wheel joints, for robot_state_publisher, at
             ``~joint_states_rate_hz``.
         contact (std_msgs/String): an obstacle's name each time the robot starts touching it.
@@ -173,6 +179,8 @@ class SimNode:
         for what, done in requests:
             if what == 'reset':
                 self.sim.reset_world()
+                for _line, sensor in self.sensors:
+                    sensor.reset()
                 self.publishers['contact_count'].publish(UInt32(0))
                 rospy.loginfo('sim_node: world reset')
             elif what == 'pause':
@@ -198,8 +206,8 @@ class SimNode:
             schedule.add(name, sensor.period_s, sensor.offset_s)
             lines[name] = (line, sensor)
         wall_ref, sim_ref = time.monotonic(), sim.time_s
-        clock_min_wall_s = 1.0 / s.max_clock_rate_hz
-        last_clock_wall = time.monotonic()
+        clock_period_s = 1.0 / s.max_clock_rate_hz
+        next_clock_wall = time.monotonic()
         self._publish_clock()
         while not self._stopped.is_set() and not rospy.is_shutdown():
             self._take_inputs()
@@ -210,11 +218,13 @@ class SimNode:
             t = sim.step()
             due = [lines[name] for name in schedule.due(t)]
             now_wall = time.monotonic()
-            if any(line.clock_first for line, _ in due) or now_wall - last_clock_wall >= clock_min_wall_s:
-                # Every node on simulated time pays for each /clock message; faster than real time,
-                # publishing every step would cost more than the physics.
+            # /clock on a schedule of max_clock_rate_hz in wall time, with half a period of tolerance: at
+            # real time every step is sent (steps come one period apart, give or take the sleep's
+            # jitter); faster, at most that rate (every node on simulated time pays for each message, and
+            # sending every step would cost more than the physics); after a stall, no burst.
+            if any(line.clock_first for line, _ in due) or now_wall >= next_clock_wall - 0.5 * clock_period_s:
                 self._publish_clock()
-                last_clock_wall = now_wall
+                next_clock_wall = max(next_clock_wall + clock_period_s, now_wall)
             stamp = rospy.Time.from_sec(t)
             for line, sensor in due:
                 if line.lazy and not any(self.wanted(topic) for topic, _, _, _ in line.publications):
