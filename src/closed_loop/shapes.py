@@ -15,7 +15,7 @@ def _corners(cx, cy, yaw, x_min, x_max, y_min, y_max):
             ((x_min, y_min), (x_max, y_min), (x_max, y_max), (x_min, y_max))]
 
 
-def _separated(a, b):
+def separated(a, b):
     """True if convex polygons ``a`` and ``b`` (corner lists) have a separating axis (an edge normal)."""
     for poly in (a, b):
         for i in range(len(poly)):
@@ -48,7 +48,7 @@ class Box:
     def overlaps_robot(obstacle, pose, rect):
         hx, hy = 0.5 * obstacle.size[0], 0.5 * obstacle.size[1]
         box = _corners(obstacle.position[0], obstacle.position[1], obstacle.yaw, -hx, hx, -hy, hy)
-        return not _separated(robot_corners(pose, rect), box)
+        return not separated(robot_corners(pose, rect), box)
 
     @staticmethod
     def pybullet_shapes(obstacle, call, pybullet):

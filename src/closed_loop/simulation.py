@@ -1,8 +1,9 @@
-"""The simulation backend: a world and a differential-drive robot in pybullet, stepped at a fixed rate.
+"""The simulation backend: a world and its differential-drive robots in pybullet, stepped at a fixed rate.
 
 One :class:`Simulation` owns one pybullet client; every pybullet call goes through it, from one thread.
-It owns the world, the robot and ``step()``, and nothing else: the sensors (``closed_loop.sensors``)
-sample it through a few primitives (link poses, ray casts, rendering, contacts). It knows nothing of
+It owns the world, the robots (:class:`Robot`, one or several) and ``step()``, and nothing else: the
+sensors (``closed_loop.sensors``) sample one robot's :class:`RobotView` of it through a few primitives
+(link poses, ray casts, rendering, contacts). It knows nothing of
 ROS: the node hands it commands and hands its sensors' readings to ROS.
 
 Conventions (REP 103): metres, seconds of simulated time, radians, x forward, z up. The world frame is
@@ -31,6 +32,11 @@ ROOT_LINK_MASS_KG = 0.001
 # of the cost.
 SOLVER_ITERATIONS = 20
 ROOT_LINK_INERTIA_KGM2 = 1e-7
+#: Collision groups: every group (pybullet's default mask), and the first of the bits that mark each robot's
+#: own LIDAR housing (robot i: 1 << (OWN_SENSOR_GROUP_BIT + i), above Bullet's own filter bits), which
+#: that robot's rays leave out so a LIDAR never sees itself, while other robots' LIDARs see the housing.
+ALL_GROUPS = -1
+OWN_SENSOR_GROUP_BIT = 8
 
 
 @dataclass
@@ -87,58 +93,44 @@ class Pose3D:
         return quaternion_yaw(self.orientation)
 
 
-class Simulation:
-    """A world and the robot in one pybullet client, advanced by :meth:`step`.
+@dataclass(frozen=True)
+class RobotSetup:
+    """One robot to put in the simulation: ``name`` ('' for the only robot of a one-robot world), its
+    SimSettings (drive limits, frames, wheels), its URDF (text or a path; None: urdf/closed_loop.urdf)
+    and its start pose (an object with x, y, yaw)."""
+    name: str
+    settings: SimSettings
+    urdf: object
+    start: object
 
-    The robot's wheels are velocity-controlled joints in the physics; the commanded body twist is
-    validated by the caller, limited and ramped here, and braked to zero by the command watchdog.
+
+class Robot:
+    """One differential-drive robot in a :class:`Simulation`: its body, wheels, drive and odometry.
+
+    The wheels are velocity-controlled joints in the physics; the commanded body twist is validated by the
+    caller, limited and ramped here, and braked to zero by the command watchdog.
     """
 
-    def __init__(self, world, settings, urdf=None):
-        """``urdf``: the robot description, as URDF text or a file path (default: urdf/closed_loop.urdf)."""
-        self.world = world
-        self.settings = settings
-        self.model = robot_model.load_robot_model(urdf or robot_model.default_urdf_path(), settings.names)
+    def __init__(self, sim, setup):
+        self.sim = sim
+        self.name = setup.name
+        self.settings = s = setup.settings
+        self.start = setup.start
+        self.model = robot_model.load_robot_model(setup.urdf or robot_model.default_urdf_path(), s.names)
         # The track the kinematics use: the wheels' geometric one, times the multiplier (skid steer).
-        self.track_m = self.model.wheel_separation_m * settings.wheel_separation_multiplier
-        self.dt_s = 1.0 / settings.physics_rate_hz
-        self.watchdog = drive.CommandWatchdog(settings.cmd_vel_timeout)
+        self.track_m = self.model.wheel_separation_m * s.wheel_separation_multiplier
+        self.watchdog = drive.CommandWatchdog(s.cmd_vel_timeout)
         self.odometry = drive.Odometry2D()
-        self._client = pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
-        if self._client < 0:
-            raise RuntimeError('pybullet could not start (gui=%s)' % settings.gui)
-        self.time_s = 0.0
-        self._world_start_s = 0.0
         self._twist = drive.STOP
         self._wheel_targets = None
         self._build()
 
-    # -- construction -------------------------------------------------------------------------------
     def _call(self, fn, *args, **kwargs):
-        return fn(*args, physicsClientId=self._client, **kwargs)
+        return self.sim._call(fn, *args, **kwargs)
 
     def _build(self):
         p = pybullet
-        self._call(p.resetSimulation)
-        self._call(p.setGravity, 0, 0, -GRAVITY_MPS2)
-        self._call(p.setTimeStep, self.dt_s)
-        self._call(p.setPhysicsEngineParameter, numSolverIterations=SOLVER_ITERATIONS)
-        if self.settings.gui:
-            self._call(p.configureDebugVisualizer, p.COV_ENABLE_GUI, 0)
-        ground_shape = self._call(p.createCollisionShape, p.GEOM_PLANE)
-        ground_visual = self._call(p.createVisualShape, p.GEOM_BOX, halfExtents=[50, 50, 0.001],
-                                   rgbaColor=list(self.world.ground_color))
-        self.ground_id = self._call(p.createMultiBody, 0, ground_shape, ground_visual)
-        self._call(p.changeDynamics, self.ground_id, -1, lateralFriction=1.0)
-        self.obstacle_ids = {}
-        self._movers = {}  # uid -> (obstacle, path corners, cycle length m)
-        for obstacle in self.world.obstacles:
-            uid = self._add_obstacle(obstacle)
-            self.obstacle_ids[uid] = obstacle.name
-            if obstacle.motion is not None:
-                points, cycle_m = obstacles.motion_path(obstacle)
-                self._movers[uid] = (obstacle, points, cycle_m)
-        start = self.world.robot_start
+        start = self.start
         # pybullet reads URDF from a file only; the text (robot_description) is the source.
         with tempfile.NamedTemporaryFile('w', suffix='.urdf', prefix='closed_loop-robot-') as urdf_file:
             urdf_file.write(self.model.urdf_text)
@@ -168,16 +160,19 @@ class Simulation:
                        anisotropicFriction=[1.0, self.settings.wheel_sideways_friction, 1.0])
         # Joints other than the wheels must not carry pybullet's default velocity motors.
         self._drive_wheels(0.0, 0.0)
+        own = 1 << (OWN_SENSOR_GROUP_BIT + len(self.sim.robots))
+        self.ray_mask = ALL_GROUPS & ~own
+        if names.scan_frame in self._links:
+            self._call(p.setCollisionFilterGroupMask, self.robot_id, self._links[names.scan_frame], own, ALL_GROUPS)
 
-    def _add_obstacle(self, obstacle):
-        shape, visual = shapes.SHAPES[obstacle.shape].pybullet_shapes(obstacle, self._call, pybullet)
-        return self._call(pybullet.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
-                          baseOrientation=yaw_quaternion(obstacle.yaw))
+    def cast_rays(self, ray_from, ray_to):
+        """:meth:`Simulation.cast_rays` for this robot's sensors: its own LIDAR housing is left out."""
+        return self.sim.cast_rays_masked(ray_from, ray_to, self.ray_mask)
 
     # -- commands and stepping ----------------------------------------------------------------------
     def command(self, twist):
         """Follow a validated :class:`drive.VelocityCommand` from now until the watchdog expires."""
-        self.watchdog.accept(twist, self.time_s)
+        self.watchdog.accept(twist, self.sim.time_s)
 
     def _drive_wheels(self, left_rps, right_rps):
         if (left_rps, right_rps) == self._wheel_targets:
@@ -187,30 +182,22 @@ class Simulation:
                    targetVelocities=[left_rps] * len(self._left_wheels) + [right_rps] * len(self._right_wheels),
                    forces=[self.settings.wheel_max_torque] * len(self._wheels))
 
-    def step(self):
-        """Advance one physics step of ``dt_s`` seconds; returns the new simulated time."""
+    def before_step(self, dt_s):
+        """Ramp toward the command (or zero, from the watchdog) and set the wheel motors."""
         s = self.settings
-        target = drive.limit_twist(self.watchdog.target(self.time_s), s.max_linear_speed, s.max_angular_speed)
-        self._twist = drive.ramp(self._twist, target, s.max_linear_accel, s.max_angular_accel, self.dt_s)
+        target = drive.limit_twist(self.watchdog.target(self.sim.time_s), s.max_linear_speed, s.max_angular_speed)
+        self._twist = drive.ramp(self._twist, target, s.max_linear_accel, s.max_angular_accel, dt_s)
         left, right = drive.wheel_speeds(self._twist, self.track_m, self.model.wheel_radius_m)
         self._drive_wheels(left, right)
-        self._move_obstacles(self.time_s + self.dt_s)
-        self._call(pybullet.stepSimulation)
-        self.time_s += self.dt_s
+
+    def after_step(self, dt_s):
+        """Integrate odometry from the wheels' speeds after the physics step."""
         wl, wr = self.wheel_velocities()
-        self.odometry.integrate(drive.body_twist(wl, wr, self.track_m, self.model.wheel_radius_m),
-                                self.dt_s)
-        return self.time_s
+        self.odometry.integrate(drive.body_twist(wl, wr, self.track_m, self.model.wheel_radius_m), dt_s)
 
-    def _move_obstacles(self, t_s):
-        for uid, (obstacle, points, cycle_m) in self._movers.items():
-            x, y = obstacles.point_on_path(points, cycle_m, obstacle.motion.speed * (t_s - self._world_start_s))
-            self._call(pybullet.resetBasePositionAndOrientation, uid, [x, y, obstacle.position[2]],
-                       yaw_quaternion(obstacle.yaw))
-
-    def reset_world(self):
-        """Put the robot back at its start, at rest, with odometry at zero; moving obstacles restart."""
-        start = self.world.robot_start
+    def reset(self):
+        """Back at its start, at rest, with odometry at zero."""
+        start = self.start
         self._call(pybullet.resetBasePositionAndOrientation, self.robot_id, [start.x, start.y, SPAWN_CLEARANCE_M],
                    yaw_quaternion(start.yaw))
         self._call(pybullet.resetBaseVelocity, self.robot_id, [0, 0, 0], [0, 0, 0])
@@ -221,8 +208,6 @@ class Simulation:
         self._drive_wheels(0.0, 0.0)
         self.watchdog.clear()
         self.odometry.reset()
-        self._world_start_s = self.time_s
-        self._move_obstacles(self.time_s)
 
     # -- state ------------------------------------------------------------------------------------------
     def wheel_velocities(self):
@@ -252,6 +237,189 @@ class Simulation:
                            computeForwardKinematics=True)
         return Pose3D(tuple(state[4]), tuple(state[5]))
 
+    def commanded_twist(self):
+        """The ramped twist the wheels are being driven at."""
+        return self._twist
+
+    @property
+    def obstacle_ids(self):
+        """{body uid: name} of what this robot can touch or see: the obstacles and the other robots."""
+        return self.sim.solid_ids(self)
+
+    def contacts_with_obstacles(self):
+        """Body uids of the obstacles (and other robots) this robot is in contact with now (not the ground)."""
+        solids = self.obstacle_ids
+        return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] in solids}
+
+    def within(self, uid, distance_m):
+        """True if this robot is within ``distance_m`` of body ``uid``."""
+        return bool(self._call(pybullet.getClosestPoints, self.robot_id, uid, distance_m))
+
+
+class RobotView:
+    """What one robot's sensors sample: that robot's state (link poses, ground truth, wheels, contacts) and
+    the shared world (time, ray casts, rendering, obstacles), with the interface of a one-robot
+    :class:`Simulation`, so a sensor class serves any robot of a multi-robot world unchanged."""
+
+    _ROBOT = ('model', 'settings', 'robot_id', 'odometry', 'watchdog', 'track_m', 'name', 'command',
+              'wheel_velocities', 'wheel_joint_states', 'ground_truth', 'link_pose', 'commanded_twist',
+              'obstacle_ids', 'contacts_with_obstacles', 'within', 'cast_rays')
+
+    def __init__(self, sim, robot):
+        self._sim = sim
+        self.robot = robot
+
+    def __getattr__(self, name):
+        return getattr(self.robot if name in self._ROBOT else self._sim, name)
+
+
+class Simulation:
+    """A world and its robots in one pybullet client, advanced by :meth:`step`.
+
+    ``robots``: [:class:`RobotSetup`] for a multi-robot world; by default one robot, unnamed, from
+    ``settings`` and ``urdf`` at the world's start. The one-robot interface (``command``, ``model``,
+    ``ground_truth``, ``link_pose``, ...) is that of the first robot; :meth:`view` gives any robot's.
+    ``settings`` also holds what is the world's: ``physics_rate_hz`` and ``gui``.
+    """
+
+    def __init__(self, world, settings, urdf=None, robots=None):
+        """``urdf``: the robot description, as URDF text or a file path (default: urdf/closed_loop.urdf)."""
+        self.world = world
+        self.settings = settings
+        self.dt_s = 1.0 / settings.physics_rate_hz
+        self._client = pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
+        if self._client < 0:
+            raise RuntimeError('pybullet could not start (gui=%s)' % settings.gui)
+        self.time_s = 0.0
+        self._world_start_s = 0.0
+        self._build()
+        if robots is None:
+            robots = [RobotSetup('', settings, urdf, world.robot_start)]
+        self.robots = []
+        try:
+            for setup in robots:
+                self.robots.append(Robot(self, setup))
+        except Exception:
+            self.close()
+            raise
+        self._robot_ids = {robot.robot_id: robot.name for robot in self.robots}
+
+    # -- construction -------------------------------------------------------------------------------
+    def _call(self, fn, *args, **kwargs):
+        return fn(*args, physicsClientId=self._client, **kwargs)
+
+    def _build(self):
+        p = pybullet
+        self._call(p.resetSimulation)
+        self._call(p.setGravity, 0, 0, -GRAVITY_MPS2)
+        self._call(p.setTimeStep, self.dt_s)
+        self._call(p.setPhysicsEngineParameter, numSolverIterations=SOLVER_ITERATIONS)
+        if self.settings.gui:
+            self._call(p.configureDebugVisualizer, p.COV_ENABLE_GUI, 0)
+        ground_shape = self._call(p.createCollisionShape, p.GEOM_PLANE)
+        ground_visual = self._call(p.createVisualShape, p.GEOM_BOX, halfExtents=[50, 50, 0.001],
+                                   rgbaColor=list(self.world.ground_color))
+        self.ground_id = self._call(p.createMultiBody, 0, ground_shape, ground_visual)
+        self._call(p.changeDynamics, self.ground_id, -1, lateralFriction=1.0)
+        self._obstacle_ids = {}
+        self._movers = {}  # uid -> (obstacle, path corners, cycle length m)
+        for obstacle in self.world.obstacles:
+            uid = self._add_obstacle(obstacle)
+            self._obstacle_ids[uid] = obstacle.name
+            if obstacle.motion is not None:
+                points, cycle_m = obstacles.motion_path(obstacle)
+                self._movers[uid] = (obstacle, points, cycle_m)
+
+    def _add_obstacle(self, obstacle):
+        shape, visual = shapes.SHAPES[obstacle.shape].pybullet_shapes(obstacle, self._call, pybullet)
+        return self._call(pybullet.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
+                          baseOrientation=yaw_quaternion(obstacle.yaw))
+
+    def solid_ids(self, robot):
+        """{body uid: name} of what ``robot`` can touch or see: every obstacle and every other robot."""
+        solids = dict(self._obstacle_ids)
+        solids.update((uid, name) for uid, name in self._robot_ids.items() if uid != robot.robot_id)
+        return solids
+
+    def view(self, index):
+        """The :class:`RobotView` of robot ``index`` (its position in ``robots``)."""
+        return RobotView(self, self.robots[index])
+
+    # -- the first robot, for a one-robot world -----------------------------------------------------------
+    @property
+    def model(self):
+        return self.robots[0].model
+
+    @property
+    def robot_id(self):
+        return self.robots[0].robot_id
+
+    @property
+    def odometry(self):
+        return self.robots[0].odometry
+
+    @property
+    def watchdog(self):
+        return self.robots[0].watchdog
+
+    @property
+    def track_m(self):
+        return self.robots[0].track_m
+
+    @property
+    def obstacle_ids(self):
+        return self.robots[0].obstacle_ids
+
+    def command(self, twist):
+        self.robots[0].command(twist)
+
+    def wheel_velocities(self):
+        return self.robots[0].wheel_velocities()
+
+    def wheel_joint_states(self):
+        return self.robots[0].wheel_joint_states()
+
+    def ground_truth(self):
+        return self.robots[0].ground_truth()
+
+    def link_pose(self, link_name):
+        return self.robots[0].link_pose(link_name)
+
+    def commanded_twist(self):
+        return self.robots[0].commanded_twist()
+
+    def contacts_with_obstacles(self):
+        return self.robots[0].contacts_with_obstacles()
+
+    def within(self, uid, distance_m):
+        return self.robots[0].within(uid, distance_m)
+
+    # -- stepping -----------------------------------------------------------------------------------------
+    def step(self):
+        """Advance one physics step of ``dt_s`` seconds; returns the new simulated time."""
+        for robot in self.robots:
+            robot.before_step(self.dt_s)
+        self._move_obstacles(self.time_s + self.dt_s)
+        self._call(pybullet.stepSimulation)
+        self.time_s += self.dt_s
+        for robot in self.robots:
+            robot.after_step(self.dt_s)
+        return self.time_s
+
+    def _move_obstacles(self, t_s):
+        for uid, (obstacle, points, cycle_m) in self._movers.items():
+            x, y = obstacles.point_on_path(points, cycle_m, obstacle.motion.speed * (t_s - self._world_start_s))
+            self._call(pybullet.resetBasePositionAndOrientation, uid, [x, y, obstacle.position[2]],
+                       yaw_quaternion(obstacle.yaw))
+
+    def reset_world(self):
+        """Put every robot back at its start, at rest, with odometry at zero; moving obstacles restart."""
+        for robot in self.robots:
+            robot.reset()
+        self._world_start_s = self.time_s
+        self._move_obstacles(self.time_s)
+
+    # -- the world, for every robot's sensors --------------------------------------------------------------
     def obstacle_positions(self):
         """[(obstacle, (x, y, z) of its centre now)] for every obstacle of the world, in the world's order:
         a moving one where its path has taken it (the pose the physics has), a static one where it stands."""
@@ -269,18 +437,19 @@ class Simulation:
     def has_moving_obstacles(self):
         return bool(self._movers)
 
-    def commanded_twist(self):
-        """The ramped twist the wheels are being driven at."""
-        return self._twist
-
-    # -- what sensors (closed_loop.sensors) sample ------------------------------------------------------
     def rotation_matrix(self, quaternion):
         """The 3x3 rotation matrix of a quaternion (x, y, z, w)."""
         return np.array(self._call(pybullet.getMatrixFromQuaternion, quaternion)).reshape(3, 3)
 
     def cast_rays(self, ray_from, ray_to):
-        """Cast rays (two (N, 3) arrays, m); (body uid of the first hit or -1, hit fraction) per ray."""
-        hits = self._call(pybullet.rayTestBatch, ray_from.tolist(), ray_to.tolist())
+        """The first robot's :meth:`Robot.cast_rays`."""
+        return self.robots[0].cast_rays(ray_from, ray_to)
+
+    def cast_rays_masked(self, ray_from, ray_to, collision_filter_mask=ALL_GROUPS):
+        """Cast rays (two (N, 3) arrays, m); (body uid of the first hit or -1, hit fraction) per ray. Only
+        shapes whose collision group is in ``collision_filter_mask`` are hit."""
+        hits = self._call(pybullet.rayTestBatch, ray_from.tolist(), ray_to.tolist(),
+                          collisionFilterMask=collision_filter_mask)
         n = len(hits)
         return (np.fromiter((h[0] for h in hits), dtype=np.int64, count=n),
                 np.fromiter((h[2] for h in hits), dtype=np.float64, count=n))
@@ -292,14 +461,6 @@ class Simulation:
         _, _, rgba, _, _ = self._call(pybullet.getCameraImage, width, height, view, projection,
                                       renderer=pybullet.ER_TINY_RENDERER, flags=pybullet.ER_NO_SEGMENTATION_MASK)
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
-
-    def contacts_with_obstacles(self):
-        """Body uids of the obstacles the robot is in contact with now (the ground excluded)."""
-        return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] in self.obstacle_ids}
-
-    def within(self, uid, distance_m):
-        """True if the robot is within ``distance_m`` of body ``uid``."""
-        return bool(self._call(pybullet.getClosestPoints, self.robot_id, uid, distance_m))
 
     def close(self):
         if self._client is not None and self._client >= 0:

@@ -11,6 +11,13 @@ z up, yaw counter-clockwise about +z. The format is documented in the README; in
     obstacles:
       - {name: front_wall, type: box, position: [3.05, 0.0], size: [0.1, 4.0, 1.0]}
 
+or, for several robots in one world, each named (its ROS namespace and TF prefix), with its robot
+profile and start::
+
+    robots:
+      - {name: r1, profile: closed_loop, start: {x: 0.0, y: 0.0, yaw: 0.0}}
+      - {name: r2, profile: burger, start: {x: 4.0, y: 0.0, yaw: 3.14159}}
+
 Validation is strict because a typo in a world file otherwise shows up as a robot that behaves
 oddly: unknown keys, duplicate keys, non-finite numbers and numbers given as strings or booleans are
 all errors. Every error is a :class:`WorldError` whose message names the file, the field and what
@@ -20,10 +27,12 @@ This module is ROS-free: it needs only the standard library and PyYAML.
 """
 import math
 import os
+import re
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
 from closed_loop.obstacles import disk_overlaps, footprint_overlaps
+from closed_loop.shapes import robot_corners, separated
 from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
 
 #: The robot as seen by the start-pose check when its footprint is not known (a world checked on its
@@ -60,9 +69,15 @@ NAMED_COLORS = {
 OBSTACLE_TYPES = ('box', 'cylinder', 'wall')
 WORLD_FILE_SUFFIX = '.yaml'
 
-_TOP_KEYS = ('name', 'description', 'ground', 'robot', 'obstacles')
+_TOP_KEYS = ('name', 'description', 'ground', 'robot', 'robots', 'obstacles')
 _GROUND_KEYS = ('color',)
 _ROBOT_KEYS = ('start',)
+_ROBOTS_KEYS = ('name', 'profile', 'start')
+#: A robot's name becomes its ROS namespace and TF prefix; a profile names files (urdf/NAME.urdf).
+ROBOT_NAME = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
+PROFILE_NAME = re.compile(r'^[A-Za-z0-9_]+$')
+DEFAULT_PROFILE = 'closed_loop'
+MAX_ROBOTS = 16
 _START_KEYS = ('x', 'y', 'yaw')
 _MOTION_KEYS = ('waypoints', 'speed', 'loop')
 _COMMON_OBSTACLE_KEYS = ('name', 'type', 'color')
@@ -120,6 +135,15 @@ class Obstacle:
 
 
 @dataclass(frozen=True)
+class RobotSpec:
+    """One robot of a multi-robot world: its name (its ROS namespace and TF prefix), its robot profile
+    (urdf/PROFILE.urdf, config/robots/PROFILE.yaml) and its start pose."""
+    name: str
+    profile: str
+    start: Pose2D
+
+
+@dataclass(frozen=True)
 class World:
     """A validated world: ``source`` is the file it came from, or ``"<string>"``."""
     name: str
@@ -128,6 +152,9 @@ class World:
     ground_color: Tuple[float, float, float, float]
     robot_start: Pose2D
     obstacles: Tuple[Obstacle, ...]
+    #: The robots of a multi-robot world (``robots:``), in file order; empty for a world with one unnamed
+    #: robot (``robot:``), whose start is ``robot_start``. With robots, ``robot_start`` is the first's.
+    robots: Tuple[RobotSpec, ...] = ()
 
 
 # --- parsing -----------------------------------------------------------------------------------
@@ -151,7 +178,7 @@ class _WorldChecker(Checker):
         return rgba
 
 
-def parse_world(data, source='<string>', footprint=None):
+def parse_world(data, source='<string>', footprint=None, check_starts=True):
     """Validate an already-loaded YAML object and return a :class:`World`.
 
     ``source`` names the file in error messages. Raises :class:`WorldError` on the first problem:
@@ -160,7 +187,10 @@ def parse_world(data, source='<string>', footprint=None):
     wall, or a robot start pose where the robot would overlap an obstacle's footprint (moving
     obstacles at their start position): the robot is ``footprint`` (an object with x_min, x_max,
     y_min, y_max in m, e.g. :class:`closed_loop.robot_model.Footprint`) grown by ``START_MARGIN_M``,
-    or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M``.
+    or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M``. For a world with ``robots:``, ``footprint``
+    is {robot name: footprint} (a robot missing from it is a disk), and no two robots may start
+    overlapping. ``check_starts`` False skips the start checks (to read which robots a world has before
+    their footprints are known).
     """
     check = _WorldChecker(source)
     top = check.mapping(data, '(top level)', _TOP_KEYS)
@@ -176,10 +206,15 @@ def parse_world(data, source='<string>', footprint=None):
             ground_color = check.color(ground['color'], 'ground.color')
 
     start = Pose2D(0.0, 0.0, 0.0)
+    if 'robot' in top and 'robots' in top:
+        check.fail('robots', 'either robot (one robot) or robots (several, named), not both', top['robots'])
     if 'robot' in top:
         robot = check.mapping(top['robot'], 'robot', _ROBOT_KEYS)
         if 'start' in robot:
             start = _parse_start(check, robot['start'], 'robot.start')
+    robots = _parse_robots(check, top['robots']) if 'robots' in top else ()
+    if robots:
+        start = robots[0].start
 
     raw_obstacles = top.get('obstacles')
     if raw_obstacles is None:
@@ -202,21 +237,80 @@ def parse_world(data, source='<string>', footprint=None):
         seen[obstacle.name] = index
         obstacles.append(obstacle)
 
+    if not check_starts:
+        pass
+    elif robots:
+        footprints = footprint if isinstance(footprint, dict) else {}
+        for index, spec in enumerate(robots):
+            _check_start(check, obstacles, spec.start, footprints.get(spec.name), 'robots[%d].start' % index)
+        _check_robots_apart(check, robots, footprints)
+    else:
+        _check_start(check, obstacles, start, None if isinstance(footprint, dict) else footprint, 'robot.start')
+
+    return World(name=name, description=description, source=source, ground_color=ground_color,
+                 robot_start=start, obstacles=tuple(obstacles), robots=robots)
+
+
+def _parse_robots(check, value):
+    if not isinstance(value, list) or not value:
+        check.fail('robots', 'a list of at least one robot {name, profile, start}', value)
+    if len(value) > MAX_ROBOTS:
+        check.fail('robots', 'at most %d robots' % MAX_ROBOTS, '%d robots' % len(value))
+    robots, seen = [], {}
+    for index, raw in enumerate(value):
+        field = 'robots[%d]' % index
+        robot = check.mapping(raw, field, _ROBOTS_KEYS)
+        name = check.get(robot, 'name', field + '.name')
+        if not isinstance(name, str) or not ROBOT_NAME.match(name):
+            check.fail(field + '.name', 'a name of letters, digits and _, starting with a letter (it becomes '
+                       'the namespace and TF prefix)', name)
+        if name in seen:
+            check.fail(field + '.name', 'a name not already used by robots[%d]' % seen[name], name)
+        seen[name] = index
+        profile = robot.get('profile', DEFAULT_PROFILE)
+        if not isinstance(profile, str) or not PROFILE_NAME.match(profile):
+            check.fail(field + '.profile', 'a robot profile name (letters, digits, _; urdf/NAME.urdf)', profile)
+        start = _parse_start(check, robot['start'], field + '.start') if 'start' in robot else Pose2D(0.0, 0.0, 0.0)
+        robots.append(RobotSpec(name, profile, start))
+    return tuple(robots)
+
+
+def _check_start(check, obstacles, start, footprint, field):
+    """The robot at ``start`` (its ``footprint`` plus START_MARGIN_M, or a disk without one) is clear of
+    every obstacle (moving ones at their start)."""
     for index, obstacle in enumerate(obstacles):
         if footprint is None and disk_overlaps(obstacle, start.x, start.y, ROBOT_CLEARANCE_RADIUS_M):
-            check.fail('robot.start',
+            check.fail(field,
                        'a pose at least %g m (the robot clearance radius) from obstacles[%d] %r'
                        % (ROBOT_CLEARANCE_RADIUS_M, index, obstacle.name),
                        {'x': start.x, 'y': start.y, 'yaw': start.yaw})
         if footprint is not None and footprint_overlaps(obstacle, start, footprint, START_MARGIN_M):
-            check.fail('robot.start',
+            check.fail(field,
                        'a pose where the robot (%.2f x %.2f m, plus %g m) is clear of obstacles[%d] %r'
                        % (footprint.x_max - footprint.x_min, footprint.y_max - footprint.y_min,
                           START_MARGIN_M, index, obstacle.name),
                        {'x': start.x, 'y': start.y, 'yaw': start.yaw})
 
-    return World(name=name, description=description, source=source, ground_color=ground_color,
-                 robot_start=start, obstacles=tuple(obstacles))
+
+def _rect(footprint):
+    """The rectangle (x_min, x_max, y_min, y_max) a robot is checked with: its footprint plus the margin,
+    or the square around the clearance disk without one."""
+    if footprint is None:
+        r = ROBOT_CLEARANCE_RADIUS_M
+        return (-r, r, -r, r)
+    m = START_MARGIN_M
+    return (footprint.x_min - m, footprint.x_max + m, footprint.y_min - m, footprint.y_max + m)
+
+
+def _check_robots_apart(check, robots, footprints):
+    """No two robots start overlapping."""
+    for i, a in enumerate(robots):
+        for j in range(i):
+            b = robots[j]
+            if not separated(robot_corners(a.start, _rect(footprints.get(a.name))),
+                             robot_corners(b.start, _rect(footprints.get(b.name)))):
+                check.fail('robots[%d].start' % i, 'a pose clear of robots[%d] %r' % (j, b.name),
+                           {'x': a.start.x, 'y': a.start.y, 'yaw': a.start.yaw})
 
 
 def _parse_start(check, value, field):
@@ -311,7 +405,7 @@ def _parse_motion(check, value, field, origin):
 
 # --- files and names ---------------------------------------------------------------------------
 
-def load_world(path, footprint=None):
+def load_world(path, footprint=None, check_starts=True):
     """Read the world file at ``path`` and return a :class:`World` (``source`` is ``path``).
 
     A missing or unreadable file, one over ``MAX_WORLD_FILE_BYTES``, a YAML syntax error (with its
@@ -320,7 +414,7 @@ def load_world(path, footprint=None):
     """
     path = os.fspath(path)
     text = read_text(path, MAX_WORLD_FILE_BYTES, WorldError, 'world file')
-    return parse_world(load_yaml(text, path, WorldError), path, footprint)
+    return parse_world(load_yaml(text, path, WorldError), path, footprint, check_starts)
 
 
 def available_worlds(worlds_dir):

@@ -11,7 +11,7 @@ from std_msgs.msg import String
 from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import LiveSettings, init_node, load_settings
+from closed_loop.nodes.common import LiveSettings, frame_id, init_node, load_settings
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -67,7 +67,7 @@ class CmdVelGuard:
         self._closing = False
         self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
         self.verdict_pub = rospy.Publisher('~verdict', String, queue_size=1, latch=True)
-        self._scan_source = SourceCheck(rospy.resolve_name('scan'), s.scan_frame)
+        self._scan_source = SourceCheck(rospy.resolve_name('scan'), frame_id(s.scan_frame))
         self._cmd_source = SourceCheck(rospy.resolve_name('cmd_vel_in'))
         self._watchdog = SilenceWatchdog(s.scan_timeout, 1.0 / s.rate_hz, self._on_silence)
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)

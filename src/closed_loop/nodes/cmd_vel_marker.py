@@ -9,7 +9,7 @@ from std_msgs.msg import ColorRGBA, Float32, String
 from visualization_msgs.msg import Marker
 
 from closed_loop import markers
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import frame_id, init_node, load_settings
 
 ARROW_SHAFT_M = 0.04
 ARROW_HEAD_M = 0.08
@@ -36,6 +36,7 @@ class CmdVelMarker:
 
     def __init__(self):
         self.settings = load_settings(markers.MarkerSettings)
+        self._frame_id = frame_id(self.settings.frame_id)   # with the robot's TF prefix, if it has one
         self._lock = threading.Lock()
         self._cmd = None
         self._cmd_wall = None
@@ -74,7 +75,7 @@ class CmdVelMarker:
 
     def _marker(self, marker_id, kind):
         m = Marker()
-        m.header.frame_id = self.settings.frame_id
+        m.header.frame_id = self._frame_id
         m.header.stamp = rospy.Time(0)  # draw at the latest transform
         m.ns = 'closed_loop'
         m.id = marker_id

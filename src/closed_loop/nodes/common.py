@@ -46,20 +46,41 @@ def init_node(name, **kwargs):
     rospy.init_node(name, **kwargs)
 
 
-def load_settings(cls):
+def load_settings(cls, namespaces=('~',)):
     """Read ``cls`` from the node's private parameters; on a bad value log it and exit with status 2.
 
-    The effective values (defaults included, converted) are written back to the parameter server, so
-    ``rosparam get`` shows what the node runs with.
+    ``namespaces``: where each parameter is looked for, in order (``'~'``, ``'/r1/sim/'``); the first
+    that has it wins, the class default otherwise. The effective values (defaults included, converted)
+    are written back to the first namespace, so ``rosparam get`` shows what the node runs with.
     """
+    def get(name, default):
+        for namespace in namespaces:
+            if rospy.has_param(namespace + name[1:]):
+                return rospy.get_param(namespace + name[1:])
+        return default
     try:
-        settings = from_params(cls, rospy.get_param)
+        settings = from_params(cls, get)
     except SettingsError as error:
-        rospy.logfatal('%s: bad parameter %s', rospy.get_name(), error)
+        where = '' if tuple(namespaces) == ('~',) else ' (in %s)' % ', '.join(namespaces)
+        rospy.logfatal('%s: bad parameter %s%s', rospy.get_name(), error, where)
         sys.exit(2)
     for name, value in vars(settings).items():
-        rospy.set_param('~' + name, value)
+        rospy.set_param(namespaces[0] + name, value)
     return settings
+
+
+def tf_prefix():
+    """The TF prefix of this node's robot ('r1/'), from the ``tf_prefix`` parameter found by searching up
+    the namespace (as robot_state_publisher finds it); '' when there is none (a one-robot graph)."""
+    key = rospy.search_param('tf_prefix')
+    prefix = rospy.get_param(key, '') if key else ''
+    prefix = prefix.strip('/') if isinstance(prefix, str) else ''
+    return prefix + '/' if prefix else ''
+
+
+def frame_id(name, prefix=None):
+    """A URDF frame name as it is on the wire: with the robot's TF prefix (:func:`tf_prefix`)."""
+    return (tf_prefix() if prefix is None else prefix) + name
 
 
 class _Server(ReconfigureServer):
@@ -117,10 +138,13 @@ class LaserMounting:
 
     def __init__(self, base_frame=robot_model.BASE_FRAME):
         self._base_frame = base_frame
+        self._prefix = tf_prefix()
         self._urdf = rospy.get_param('robot_description', None)
         self._cache = {}
 
     def forward_rad(self, frame_id):
+        if frame_id.startswith(self._prefix):
+            frame_id = frame_id[len(self._prefix):]   # the URDF's name, without the robot's TF prefix
         if frame_id not in self._cache:
             forward = 0.0
             if isinstance(self._urdf, str) and self._urdf.strip():

@@ -9,7 +9,7 @@ from std_msgs.msg import String
 
 from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
-from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, frame_id
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist_from_command
 from closed_loop.scan import ScanError, sector_min
 from closed_loop.sources import SourceCheck
@@ -38,7 +38,9 @@ class FrontController:
         (or twice per ``~scan_timeout``, if that is more often).
         ``~scan_timeout`` (s, default 0.5, at most 5): a scan older than this (ROS clock), or no scan
         received for this long (wall clock), means stop.
-        ``~scan_frame`` (default base_scan): the laser's frame; scans in another frame mean stop.
+        ``~scan_frame`` (default base_scan): the laser's frame; scans in another frame mean stop. With a
+        ``tf_prefix`` parameter in the robot's namespace (a multi-robot world), the expected frame id is
+        prefixed (``r1/base_scan``), as robot_state_publisher and the simulator prefix theirs.
 
     The controller contract: every controller publishes ``cmd_vel`` and its mode on ``~mode``
     (std_msgs/String, latched; the name of a member of the controller's own mode enum), on every
@@ -60,7 +62,7 @@ class FrontController:
         self.mode = None  # the mode enum member last published; None before the first
         self._mode_pub = rospy.Publisher('~mode', String, queue_size=1, latch=True)
         self.setup()
-        self._source = SourceCheck(rospy.resolve_name('scan'), settings.scan_frame)
+        self._source = SourceCheck(rospy.resolve_name('scan'), frame_id(settings.scan_frame))
         # "Ahead" is the robot's forward direction in the laser's frame, from how the URDF mounts it.
         self._forward_rad = LaserMounting().forward_rad(settings.scan_frame)
         self._watchdog = SilenceWatchdog(settings.scan_timeout, settings.watchdog_period_s, self._on_silence)

@@ -14,6 +14,9 @@ from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, d
 # One output per scan: a burst of scans (rosbag play, a busy machine) must not lose any, and each is
 # cheap to process, so queue a few rather than keep only the newest.
 SCAN_QUEUE_SIZE = 10
+#: An obstacle within warn_distance is a standing state (a robot stopped at a wall stays so): warned once on
+#: entry, and again only after the nearest obstacle has been this much beyond warn_distance.
+WARN_RELEASE_M = 0.05
 
 
 class ObstacleDetector:
@@ -32,8 +35,8 @@ class ObstacleDetector:
     Parameters:
         ``~front_half_angle`` (rad, default pi/2): half-width of the front sector.
         ``~side_half_angle`` (rad, default pi/4): half-width of the left and right sectors.
-        ``~warn_distance`` (m, default 0.5): log a (throttled) warning when the nearest obstacle is
-        closer than this.
+        ``~warn_distance`` (m, default 0.5): log a warning when the nearest obstacle comes closer than
+        this (once; again only after it has been ``WARN_RELEASE_M`` beyond it).
         All three are live (dynamic_reconfigure, :class:`closed_loop.nodes.common.LiveSettings`).
     """
 
@@ -46,6 +49,7 @@ class ObstacleDetector:
         # Sectors turn with the laser's mounting on the robot (robot_description), per scan frame.
         self._mounting = LaserMounting()
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=SCAN_QUEUE_SIZE)
+        self._close = False   # an obstacle within warn_distance was reported and has not left
         # Live settings: each scan reads self._settings once; swapping the reference is atomic.
         self._live = LiveSettings(self._settings, self._take_settings)
 
@@ -68,8 +72,14 @@ class ObstacleDetector:
         if not overall.trusted:
             rospy.logwarn_throttle(LOG_PERIOD_S, 'scan has %s', describe_reading(overall))
         elif overall.distance_m < settings.warn_distance:
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'Obstacle close: %.2f m', overall.distance_m)
+            if not self._close:
+                rospy.logwarn('Obstacle close: %.2f m (warn_distance %.2f m)', overall.distance_m,
+                              settings.warn_distance)
+                self._close = True
         else:
+            if self._close and overall.distance_m >= settings.warn_distance + WARN_RELEASE_M:
+                rospy.loginfo('Clear again: nearest obstacle %.2f m', overall.distance_m)
+                self._close = False
             rospy.logdebug_throttle(LOG_PERIOD_S, 'Clear: nearest obstacle %.2f m',
                                     overall.distance_m)
 

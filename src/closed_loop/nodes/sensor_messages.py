@@ -1,8 +1,10 @@
 """Sensor readings as ROS messages: one conversion per sensor of closed_loop.sensors, for sim_node's table.
 
-A conversion is ``convert(node, sensor, reading, stamp)`` and returns ``[(topic, message), ...]``; it may ask
-``node.wanted(topic)`` to skip building messages nobody subscribes to. ``node.settings`` is the simulator's
-SimSettings (frame names).
+A conversion is ``convert(port, sensor, reading, stamp)`` and returns ``[(topic, message), ...]``; ``port`` is
+the robot's side of the simulator node (``closed_loop.nodes.sim_node.RobotPort``): it may ask
+``port.wanted(topic)`` to skip building messages nobody subscribes to; ``port.settings`` is the robot's
+SimSettings (URDF frame names), and ``port.frame(name)`` the frame id on the wire (with the robot's TF
+prefix in a multi-robot world, ``r1/base_scan``). Topics are relative to the robot's namespace.
 """
 import math
 
@@ -32,7 +34,7 @@ def scan_messages(node, lidar, ranges, stamp):
     layout = lidar.layout
     msg = LaserScan()
     msg.header.stamp = stamp
-    msg.header.frame_id = node.settings.scan_frame
+    msg.header.frame_id = node.frame(node.settings.scan_frame)
     msg.angle_min = layout.angle_min
     msg.angle_max = layout.angle_max
     msg.angle_increment = layout.angle_increment
@@ -50,7 +52,7 @@ def camera_messages(node, camera, rgb, stamp):
     height, width, step, data = image_encoding.array_to_image(rgb, 'rgb8')
     image = Image(height=height, width=width, encoding='rgb8', is_bigendian=0, step=step, data=data)
     image.header.stamp = stamp
-    image.header.frame_id = node.settings.camera_optical_frame
+    image.header.frame_id = node.frame(node.settings.camera_optical_frame)
     k = camera.intrinsics
     info = CameraInfo()
     info.header = image.header
@@ -67,11 +69,12 @@ def odometry_messages(node, _odometry, reading, stamp):
     """nav_msgs/Odometry odom -> base frame and its TF, with world -> odom; the ground truth in frame
     ``world``."""
     out = []
-    base = node.settings.base_frame
+    base = node.frame(node.settings.base_frame)
+    odom_frame = node.frame(ODOM_FRAME)
     if node.wanted('odom') or node.wanted('/tf'):
         odom = Odometry()
         odom.header.stamp = stamp
-        odom.header.frame_id = ODOM_FRAME
+        odom.header.frame_id = odom_frame
         odom.child_frame_id = base
         odom.pose.pose.position.x, odom.pose.pose.position.y = reading.x, reading.y
         odom.pose.pose.orientation = Quaternion(*yaw_quaternion(reading.yaw))
@@ -82,11 +85,11 @@ def odometry_messages(node, _odometry, reading, stamp):
             odom.twist.covariance[7 * i] = ODOM_TWIST_VARIANCE
         tf = TransformStamped()
         tf.header.stamp = stamp
-        tf.header.frame_id = ODOM_FRAME
+        tf.header.frame_id = odom_frame
         tf.child_frame_id = base
         tf.transform.translation.x, tf.transform.translation.y = reading.x, reading.y
         tf.transform.rotation = odom.pose.pose.orientation
-        out += [('odom', odom), ('/tf', TFMessage([world_to_odom(reading, stamp), tf]))]
+        out += [('odom', odom), ('/tf', TFMessage([world_to_odom(reading, stamp, odom_frame), tf]))]
     if node.wanted('base_pose_ground_truth'):
         pose, (linear, angular) = reading.truth_pose, reading.truth_velocity
         truth = Odometry()
@@ -106,7 +109,7 @@ def odometry_messages(node, _odometry, reading, stamp):
     return out
 
 
-def world_to_odom(reading, stamp):
+def world_to_odom(reading, stamp, odom_frame=ODOM_FRAME):
     """TF world -> odom from the ground truth and the odometry: where odometry's origin lies in the world
     (the start pose, moved by whatever odometry has drifted), so ground truth and odom share one tree."""
     truth_x, truth_y, _ = reading.truth_pose.position
@@ -115,7 +118,7 @@ def world_to_odom(reading, stamp):
     tf = TransformStamped()
     tf.header.stamp = stamp
     tf.header.frame_id = WORLD_FRAME
-    tf.child_frame_id = ODOM_FRAME
+    tf.child_frame_id = odom_frame
     tf.transform.translation.x = truth_x - (c * reading.x - s * reading.y)
     tf.transform.translation.y = truth_y - (s * reading.x + c * reading.y)
     tf.transform.rotation = Quaternion(*yaw_quaternion(yaw))
@@ -153,10 +156,11 @@ def joint_messages(_node, _wheels, reading, stamp):
     return [('joint_states', joints)]
 
 
-def contact_messages(_node, contacts, began, stamp):
+def contact_messages(node, contacts, began, stamp):
     """std_msgs/String per contact begun, and the latched count; each contact is also a warning."""
     out = []
     for name in began:
-        rospy.logwarn('sim_node: contact with %r at t = %.3f s', name, stamp.to_sec())
+        rospy.logwarn('sim_node: %scontact with %r at t = %.3f s', node.name + ': ' if node.name else '', name,
+                      stamp.to_sec())
         out += [('contact', String(name)), ('contact_count', UInt32(contacts.count))]
     return out

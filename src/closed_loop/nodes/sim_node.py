@@ -27,25 +27,28 @@ from closed_loop.sensors.lidar import Lidar
 from closed_loop.sensors.odometry import Odometry as OdometrySensor
 from closed_loop.sensors.wheels import WheelEncoders
 from closed_loop.sensors.world_state import WorldState
-from closed_loop.simulation import SimSettings, Simulation
+from closed_loop.simulation import RobotSetup, SimSettings, Simulation
 from closed_loop.sources import SourceCheck
 
 #: One line per sensor: its core class (closed_loop.sensors), its publications (topic, type, queue size,
 #: latched), its conversion (closed_loop.nodes.sensor_messages), whether it is sampled only while one of
-#: its topics has a subscriber (like a lazy camera driver), and whether /clock goes out first (consumers
-#: judge a scan's or an image's age by it). Lines are served in this order after each physics step.
-SensorLine = namedtuple('SensorLine', 'sensor publications convert lazy clock_first')
+#: its topics has a subscriber (like a lazy camera driver), whether /clock goes out first (consumers
+#: judge a scan's or an image's age by it), and whether it is the world's rather than each robot's (served
+#: once, with the first robot). Lines are served in this order after each physics step, robot by robot.
+SensorLine = namedtuple('SensorLine', 'sensor publications convert lazy clock_first shared')
 SENSORS = (
     SensorLine(Contacts, (('contact', String, 10, False), ('contact_count', UInt32, 1, True)),
-               to_msgs.contact_messages, False, False),
+               to_msgs.contact_messages, False, False, False),
     SensorLine(OdometrySensor, (('odom', Odometry, 10, False), ('/tf', TFMessage, 20, False),
                                 ('base_pose_ground_truth', Odometry, 10, False)),
-               to_msgs.odometry_messages, True, False),
-    SensorLine(WheelEncoders, (('joint_states', JointState, 10, False),), to_msgs.joint_messages, True, False),
-    SensorLine(Lidar, (('scan', LaserScan, 5, False),), to_msgs.scan_messages, False, True),
+               to_msgs.odometry_messages, True, False, False),
+    SensorLine(WheelEncoders, (('joint_states', JointState, 10, False),), to_msgs.joint_messages,
+               True, False, False),
+    SensorLine(Lidar, (('scan', LaserScan, 5, False),), to_msgs.scan_messages, False, True, False),
     SensorLine(Camera, (('camera/image_raw', Image, 2, False), ('camera/camera_info', CameraInfo, 2, False)),
-               to_msgs.camera_messages, True, True),
-    SensorLine(WorldState, (('world_markers', MarkerArray, 1, True),), to_msgs.world_messages, False, False),
+               to_msgs.camera_messages, True, True, False),
+    SensorLine(WorldState, (('world_markers', MarkerArray, 1, True),), to_msgs.world_messages,
+               False, False, True),
 )
 # How far behind the wall clock the loop may fall before it stops trying to catch up.
 MAX_LAG_S = 0.25
@@ -58,6 +61,104 @@ PAUSED_POLL_S = 0.01
 def package_path():
     """closed_loop's share folder (source tree or install space), where worlds/ and urdf/ live."""
     return rospkg.RosPack().get_path('closed_loop')
+
+
+class RobotPort:
+    """One robot's side of the simulator node: its sensors and their publishers, its ``cmd_vel`` input and
+    its frame names. The only robot of a one-robot world has no name: its topics are relative to the node's
+    namespace (``scan``) and its frames are the URDF's (``base_scan``). Robot NAME of a multi-robot world
+    has its topics under NAME (``NAME/scan``, ``NAME/cmd_vel``) and its frames prefixed (``NAME/base_scan``,
+    ``NAME/odom``), as robot_state_publisher prefixes them with the robot's ``tf_prefix``. What is the
+    world's rather than a robot's (``world_markers``) is served once, by the first robot's port."""
+
+    def __init__(self, node, index, setup):
+        self.name = setup.name
+        self.settings = setup.settings
+        self.view = node.sim.view(index)
+        self._topic_prefix = setup.name + '/' if setup.name else ''
+        self._frame_prefix = setup.name + '/' if setup.name else ''
+        namespaces = ('/%s/sim/' % setup.name, '~') if setup.name else ('~',)
+        self.sensors = []
+        self.publishers = {}
+        for line in SENSORS:
+            if line.shared and index > 0:
+                continue
+            settings = (load_settings(line.sensor.settings_class, namespaces)
+                        if line.sensor.settings_class else None)
+            sensor = line.sensor(settings, self.view)
+            if not sensor.available:
+                rospy.loginfo('sim_node: no %s on %s (or turned off)', line.sensor.__name__.lower(),
+                              self.label)
+                continue
+            self.sensors.append((line, sensor))
+            for topic, msg_type, queue, latched in line.publications:
+                self.publishers[topic] = rospy.Publisher(self.topic(topic, line.shared), msg_type,
+                                                         queue_size=queue, latch=latched)
+        self._lock = threading.Lock()
+        self._pending_command = None
+        self._cmd_source = SourceCheck(rospy.resolve_name(self.topic('cmd_vel')))
+        self.cmd_sub = rospy.Subscriber(self.topic('cmd_vel'), Twist, self._on_cmd_vel, queue_size=10)
+        self.publishers['contact_count'].publish(UInt32(0))
+
+    @property
+    def label(self):
+        return 'robot %r' % self.name if self.name else 'the robot'
+
+    def describe(self):
+        return '%s %s with %s' % (self.label, self.view.model.source,
+                                  ', '.join(type(sensor).__name__ for _, sensor in self.sensors))
+
+    def topic(self, name, shared=False):
+        """A topic of this robot: global ones (``/tf``) and the world's as they are, the others under the
+        robot's name."""
+        return name if shared or name.startswith('/') else self._topic_prefix + name
+
+    def frame(self, name):
+        """A URDF frame name as this robot's messages carry it."""
+        return self._frame_prefix + name
+
+    def wanted(self, topic):
+        """True if ``topic`` has a subscriber (messages nobody listens to are not built)."""
+        return self.publishers[topic].get_num_connections() > 0
+
+    # -- input (a subscriber thread): store, and let the loop act ----------------------------------------------
+    def _on_cmd_vel(self, msg):
+        conflict = self._cmd_source.observe(message_callerid(msg), None, time.monotonic(),
+                                            connected_publishers(self.cmd_sub))
+        if conflict is not None:
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: %s' % conflict.replace(
+                'stopping until only one remains', 'the base obeys each message as it comes'))
+        try:
+            twist = drive.validate_twist((msg.linear.x, msg.linear.y, msg.linear.z),
+                                         (msg.angular.x, msg.angular.y, msg.angular.z))
+        except drive.CommandError as error:
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: rejected cmd_vel: %s; braking' % error)
+            twist = drive.STOP
+        for clipped in drive.clipped_fields(twist, self.settings.max_linear_speed,
+                                            self.settings.max_angular_speed):
+            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: cmd_vel from %s: %s'
+                                   % (message_callerid(msg) or 'an unknown publisher', clipped))
+        with self._lock:
+            self._pending_command = twist
+
+    # -- the loop's side -----------------------------------------------------------------------------------------
+    def take_command(self):
+        with self._lock:
+            command, self._pending_command = self._pending_command, None
+        if command is not None:
+            self.view.command(command)
+
+    def reset(self):
+        for _line, sensor in self.sensors:
+            sensor.reset()
+        self.publishers['contact_count'].publish(UInt32(0))
+
+    def serve(self, line, sensor, stamp):
+        """Sample ``sensor`` and publish its messages (a lazy sensor only while someone listens)."""
+        if line.lazy and not any(self.wanted(topic) for topic, _, _, _ in line.publications):
+            return
+        for topic, msg in line.convert(self, sensor, sensor.sample(self.view), stamp):
+            self.publishers[topic].publish(msg)
 
 
 class SimNode:
@@ -95,73 +196,69 @@ class SimNode:
     def __init__(self):
         self.settings = load_settings(SimSettings)
         self.scheduling = load_settings(SchedulingSettings)
-        urdf = rospy.get_param('robot_description', None)
-        if not isinstance(urdf, str) or not urdf.strip():
-            urdf = os.path.join(package_path(), 'urdf', 'closed_loop.urdf')
-            rospy.logwarn('sim_node: no robot_description on the parameter server; using %s', urdf)
-        try:
-            model = robot_model.load_robot_model(urdf, self.settings.names)
-        except robot_model.RobotModelError as error:
-            rospy.logfatal('sim_node: %s', error)
-            sys.exit(1)
         try:
             path = world_mod.resolve_world(self.settings.world, os.path.join(package_path(), 'worlds'))
-            # The start must be free for this robot's footprint, not a generic disc.
-            world = world_mod.load_world(path, model.footprint)
+            world = world_mod.load_world(path, check_starts=False)   # which robots; starts checked below
         except world_mod.WorldError as error:
             rospy.logfatal('sim_node: cannot load the world: %s', error)
             sys.exit(1)
-        self.sim = Simulation(world, self.settings, urdf)
-        # The sensors this robot has, each with its settings, and their publishers.
-        self.sensors = []
-        self.publishers = {}
-        for line in SENSORS:
-            settings = load_settings(line.sensor.settings_class) if line.sensor.settings_class else None
-            sensor = line.sensor(settings, self.sim)
-            if not sensor.available:
-                rospy.loginfo('sim_node: no %s on this robot (or turned off)', line.sensor.__name__.lower())
-                continue
-            self.sensors.append((line, sensor))
-            for topic, msg_type, queue, latched in line.publications:
-                self.publishers[topic] = rospy.Publisher(topic, msg_type, queue_size=queue, latch=latched)
-        self.contacts = next(sensor for line, sensor in self.sensors if isinstance(sensor, Contacts))
-        rospy.loginfo('sim_node: world %r from %s; robot %s; real_time_factor %g; sensors %s', world.name, path,
-                      self.sim.model.source, self.scheduling.real_time_factor,
-                      ', '.join(type(sensor).__name__ for _, sensor in self.sensors))
+        setups = self._robot_setups(world)
+        try:
+            # Every start must be free for its robot's footprint, not a generic disc.
+            footprints = {setup.name: robot_model.load_robot_model(setup.urdf, setup.settings.names).footprint
+                          for setup in setups}
+            world = world_mod.load_world(path, footprints if world.robots else footprints[''])
+        except robot_model.RobotModelError as error:
+            rospy.logfatal('sim_node: %s', error)
+            sys.exit(1)
+        except world_mod.WorldError as error:
+            rospy.logfatal('sim_node: cannot load the world: %s', error)
+            sys.exit(1)
+        starts = {spec.name: spec.start for spec in world.robots} or {'': world.robot_start}
+        setups = [RobotSetup(setup.name, setup.settings, setup.urdf, starts[setup.name]) for setup in setups]
+        self.sim = Simulation(world, self.settings, robots=setups)
+        self.ports = [RobotPort(self, index, setup) for index, setup in enumerate(setups)]
+        rospy.loginfo('sim_node: world %r from %s; %s; real_time_factor %g', world.name, path,
+                      '; '.join(port.describe() for port in self.ports), self.scheduling.real_time_factor)
         self._lock = threading.Lock()
-        self._pending_command = None
         self._requests = []
         self._paused = False
         self._stopped = threading.Event()
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
-        self._cmd_source = SourceCheck(rospy.resolve_name('cmd_vel'))
-        self.cmd_sub = rospy.Subscriber('cmd_vel', Twist, self._on_cmd_vel, queue_size=10)
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))
         rospy.Service('~pause_physics', Empty, lambda _: self._request('pause'))
         rospy.Service('~unpause_physics', Empty, lambda _: self._request('unpause'))
         rospy.on_shutdown(self._stopped.set)
-        self.publishers['contact_count'].publish(UInt32(0))
+
+    def _robot_setups(self, world):
+        """One RobotSetup per robot (start filled in later). A one-robot world: the node's own settings
+        and ``robot_description``. A multi-robot world: robot NAME's settings from ``/NAME/sim/`` (then the
+        node's own), its URDF from ``/NAME/robot_description``, which the robot's launch (robot.launch)
+        loads from the profile the world names."""
+        if not world.robots:
+            urdf = rospy.get_param('robot_description', None)
+            if not isinstance(urdf, str) or not urdf.strip():
+                urdf = os.path.join(package_path(), 'urdf', 'closed_loop.urdf')
+                rospy.logwarn('sim_node: no robot_description on the parameter server; using %s', urdf)
+            return [RobotSetup('', self.settings, urdf, None)]
+        setups = []
+        for spec in world.robots:
+            namespace = '/%s/' % spec.name
+            urdf = rospy.get_param(namespace + 'robot_description', None)
+            if not isinstance(urdf, str) or not urdf.strip():
+                rospy.logfatal('sim_node: world robot %r: no %srobot_description (run launch/robot.launch '
+                               'name:=%s robot:=%s)', spec.name, namespace, spec.name, spec.profile)
+                sys.exit(1)
+            profile = rospy.get_param(namespace + 'robot_profile', spec.profile)
+            if profile != spec.profile:
+                rospy.logfatal('sim_node: world robot %r: the world says profile %r, %srobot_profile says %r',
+                               spec.name, spec.profile, namespace, profile)
+                sys.exit(1)
+            settings = load_settings(SimSettings, (namespace + 'sim/', '~'))
+            setups.append(RobotSetup(spec.name, settings, urdf, None))
+        return setups
 
     # -- inputs (other threads): store, and let the loop act -----------------------------------------------
-    def _on_cmd_vel(self, msg):
-        conflict = self._cmd_source.observe(message_callerid(msg), None, time.monotonic(),
-                                            connected_publishers(self.cmd_sub))
-        if conflict is not None:
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: %s' % conflict.replace(
-                'stopping until only one remains', 'the base obeys each message as it comes'))
-        try:
-            twist = drive.validate_twist((msg.linear.x, msg.linear.y, msg.linear.z),
-                                         (msg.angular.x, msg.angular.y, msg.angular.z))
-        except drive.CommandError as error:
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: rejected cmd_vel: %s; braking' % error)
-            twist = drive.STOP
-        for clipped in drive.clipped_fields(twist, self.settings.max_linear_speed,
-                                            self.settings.max_angular_speed):
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: cmd_vel from %s: %s'
-                                   % (message_callerid(msg) or 'an unknown publisher', clipped))
-        with self._lock:
-            self._pending_command = twist
-
     def _request(self, what):
         done = threading.Event()
         with self._lock:
@@ -172,16 +269,14 @@ class SimNode:
 
     def _take_inputs(self):
         with self._lock:
-            command, self._pending_command = self._pending_command, None
             requests, self._requests = self._requests, []
-        if command is not None:
-            self.sim.command(command)
+        for port in self.ports:
+            port.take_command()
         for what, done in requests:
             if what == 'reset':
                 self.sim.reset_world()
-                for _line, sensor in self.sensors:
-                    sensor.reset()
-                self.publishers['contact_count'].publish(UInt32(0))
+                for port in self.ports:
+                    port.reset()
                 rospy.loginfo('sim_node: world reset')
             elif what == 'pause':
                 self._paused = True
@@ -192,19 +287,16 @@ class SimNode:
             done.set()
 
     # -- the loop: the only code that calls the simulation ----------------------------------------------------
-    def wanted(self, topic):
-        """True if ``topic`` has a subscriber (messages nobody listens to are not built)."""
-        return self.publishers[topic].get_num_connections() > 0
-
     def run(self):
         s = self.scheduling
         sim = self.sim
         schedule = Schedule(sim.dt_s)
-        lines = {}
-        for line, sensor in self.sensors:
-            name = type(sensor).__name__
-            schedule.add(name, sensor.period_s, sensor.offset_s)
-            lines[name] = (line, sensor)
+        tasks = {}
+        for port in self.ports:
+            for line, sensor in port.sensors:
+                name = '%s/%s' % (port.name, type(sensor).__name__)
+                schedule.add(name, sensor.period_s, sensor.offset_s)
+                tasks[name] = (port, line, sensor)
         wall_ref, sim_ref = time.monotonic(), sim.time_s
         clock_period_s = 1.0 / s.max_clock_rate_hz
         next_clock_wall = time.monotonic()
@@ -216,21 +308,18 @@ class SimNode:
                 wall_ref, sim_ref = time.monotonic(), sim.time_s
                 continue
             t = sim.step()
-            due = [lines[name] for name in schedule.due(t)]
+            due = [tasks[name] for name in schedule.due(t)]
             now_wall = time.monotonic()
             # /clock on a schedule of max_clock_rate_hz in wall time, with half a period of tolerance: at
             # real time every step is sent (steps come one period apart, give or take the sleep's
             # jitter); faster, at most that rate (every node on simulated time pays for each message, and
             # sending every step would cost more than the physics); after a stall, no burst.
-            if any(line.clock_first for line, _ in due) or now_wall >= next_clock_wall - 0.5 * clock_period_s:
+            if any(line.clock_first for _, line, _ in due) or now_wall >= next_clock_wall - 0.5 * clock_period_s:
                 self._publish_clock()
                 next_clock_wall = max(next_clock_wall + clock_period_s, now_wall)
             stamp = rospy.Time.from_sec(t)
-            for line, sensor in due:
-                if line.lazy and not any(self.wanted(topic) for topic, _, _, _ in line.publications):
-                    continue
-                for topic, msg in line.convert(self, sensor, sensor.sample(sim), stamp):
-                    self.publishers[topic].publish(msg)
+            for port, line, sensor in due:
+                port.serve(line, sensor, stamp)
             if s.real_time_factor > 0:
                 target = wall_ref + (t - sim_ref) / s.real_time_factor
                 delay = target - time.monotonic()

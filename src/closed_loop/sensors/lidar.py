@@ -74,9 +74,10 @@ class Lidar(Sensor):
         return 1.0 / self.settings.scan_rate_hz
 
     def sample(self, sim):
-        """Each ray is cast from the sensor origin to ``range_max`` (the LIDAR link has no collision shape,
-        so a ray cannot hit the sensor itself), so a hit's distance is its fraction of ``range_max``.
-        A hit closer than ``range_min`` is reported as -inf (too close to measure); no return is +inf."""
+        """Each ray is cast from the sensor origin to ``range_max`` (a ray cast from inside the LIDAR's
+        housing does not hit it, and hits on the robot's own body are dropped), so a hit's distance is its
+        fraction of ``range_max``. Other robots are hit like obstacles. A hit closer than ``range_min``
+        is reported as -inf (too close to measure); no return is +inf."""
         s = self.settings
         pose = sim.link_pose(self.frame)
         dirs = self._ray_dirs @ sim.rotation_matrix(pose.orientation).T
