@@ -60,6 +60,8 @@ class FrontController:
         self._closing = False
         self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
         self.mode = None  # the mode enum member last published; None before the first
+        self._scan_seen = False
+        self._started_wall = time.monotonic()
         self._mode_pub = rospy.Publisher('~mode', String, queue_size=1, latch=True)
         self.setup()
         self._source = SourceCheck(rospy.resolve_name('scan'), frame_id(settings.scan_frame))
@@ -114,8 +116,14 @@ class FrontController:
             return None
         return rospy.Time.now().to_sec() - stamp_s
 
+    def awaiting_first_scan(self):
+        """True from start-up until the first scan arrives or ``~scan_timeout`` s of wall time have passed:
+        meanwhile zero goes out, but "no scan yet" is start-up, not a fault to announce."""
+        return not self._scan_seen and time.monotonic() - self._started_wall < self.settings.scan_timeout
+
     def _on_scan(self, msg):
         self._watchdog.kick()
+        self._scan_seen = True
         refused = self._source.observe(message_callerid(msg), msg.header.frame_id, time.monotonic(),
                                        connected_publishers(self._scan_sub))
         if refused is not None:

@@ -66,6 +66,8 @@ class StopOnObstacle(FrontController):
     def _publish(self, decision):
         """Publish ``decision`` (call with the lock held)."""
         self.cmd_pub.publish(twist(decision.linear_x, 0.0))
+        if decision.fault and self.awaiting_first_scan():
+            return   # a timer tick before the first scan: stopped, and nothing to report yet
         # Stopping is a warning, logged once on entry: standing at the wall is the normal end state. A stop
         # for want of input (no, stale or invalid scans) is a fault and is repeated while it lasts.
         self.publish_mode(decision.zone, decision.reason,
