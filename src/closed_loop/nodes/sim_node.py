@@ -105,7 +105,7 @@ class RobotPort:
         return 'robot %r' % self.name if self.name else 'the robot'
 
     def describe(self):
-        return '%s %s with %s' % (self.label, self.view.model.source,
+        return '%s (%s) with %s' % (self.label, self.view.model.source,
                                   ', '.join(type(sensor).__name__ for _, sensor in self.sensors))
 
     def topic(self, name, shared=False):
