@@ -273,6 +273,11 @@ class RobotView:
         return getattr(self.robot if name in self._ROBOT else self._sim, name)
 
 
+def _first_robot(name):
+    """A :class:`Simulation` attribute that is its first robot's (the one-robot interface)."""
+    return property(lambda sim: getattr(sim.robots[0], name), doc="The first robot's ``%s``." % name)
+
+
 class Simulation:
     """A world and its robots in one pybullet client, advanced by :meth:`step`.
 
@@ -345,54 +350,22 @@ class Simulation:
         """The :class:`RobotView` of robot ``index`` (its position in ``robots``)."""
         return RobotView(self, self.robots[index])
 
-    # -- the first robot, for a one-robot world -----------------------------------------------------------
-    @property
-    def model(self):
-        return self.robots[0].model
-
-    @property
-    def robot_id(self):
-        return self.robots[0].robot_id
-
-    @property
-    def odometry(self):
-        return self.robots[0].odometry
-
-    @property
-    def watchdog(self):
-        return self.robots[0].watchdog
-
-    @property
-    def track_m(self):
-        return self.robots[0].track_m
-
-    @property
-    def obstacle_ids(self):
-        return self.robots[0].obstacle_ids
-
-    def command(self, twist):
-        self.robots[0].command(twist)
-
-    def wheel_velocities(self):
-        return self.robots[0].wheel_velocities()
-
-    def wheel_joint_states(self):
-        return self.robots[0].wheel_joint_states()
-
-    def ground_truth(self):
-        return self.robots[0].ground_truth()
-
-    def link_pose(self, link_name):
-        return self.robots[0].link_pose(link_name)
-
-    def commanded_twist(self):
-        return self.robots[0].commanded_twist()
-
-    def contacts_with_obstacles(self):
-        return self.robots[0].contacts_with_obstacles()
-
-    def within(self, uid, distance_m):
-        return self.robots[0].within(uid, distance_m)
+    # -- the first robot, for a one-robot world: robots[0]'s attributes, as a RobotView has them ----------------
+    model = _first_robot('model')
+    robot_id = _first_robot('robot_id')
+    odometry = _first_robot('odometry')
+    watchdog = _first_robot('watchdog')
+    track_m = _first_robot('track_m')
+    obstacle_ids = _first_robot('obstacle_ids')
+    command = _first_robot('command')
+    wheel_velocities = _first_robot('wheel_velocities')
+    wheel_joint_states = _first_robot('wheel_joint_states')
+    ground_truth = _first_robot('ground_truth')
+    link_pose = _first_robot('link_pose')
+    commanded_twist = _first_robot('commanded_twist')
+    contacts_with_obstacles = _first_robot('contacts_with_obstacles')
+    within = _first_robot('within')
+    cast_rays = _first_robot('cast_rays')
 
     # -- stepping -----------------------------------------------------------------------------------------
     def step(self):
@@ -440,10 +413,6 @@ class Simulation:
     def rotation_matrix(self, quaternion):
         """The 3x3 rotation matrix of a quaternion (x, y, z, w)."""
         return np.array(self._call(pybullet.getMatrixFromQuaternion, quaternion)).reshape(3, 3)
-
-    def cast_rays(self, ray_from, ray_to):
-        """The first robot's :meth:`Robot.cast_rays`."""
-        return self.robots[0].cast_rays(ray_from, ray_to)
 
     def cast_rays_masked(self, ray_from, ray_to, collision_filter_mask=ALL_GROUPS):
         """Cast rays (two (N, 3) arrays, m); (body uid of the first hit or -1, hit fraction) per ray. Only
