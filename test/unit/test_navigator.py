@@ -1,0 +1,196 @@
+"""The reactive navigator's planner on synthetic scans: which way it turns, gaps it will not enter, stops."""
+import math
+import time
+
+import numpy
+import pytest
+
+from closed_loop.navigator import NavigatorError, NavigatorSettings, outline, plan, predict
+from closed_loop.robot_model import Footprint, Pose2DInBase
+from closed_loop.scan import Scan
+
+FOOTPRINT = Footprint(-0.15, 0.15, -0.14, 0.14)      # the package's robot (urdf/closed_loop.urdf)
+JACKAL = Footprint(-0.254, 0.254, -0.2155, 0.2155)
+LASER = Pose2DInBase(0.0, 0.0, 0.0)
+RAYS = 720
+
+
+def scan_of(circles=(), segments=(), rays=RAYS, range_max=8.0):
+    """A scan from the origin, rays over [-pi, pi), of discs (x, y, r) and wall segments ((x0, y0), (x1, y1))."""
+    angles = -math.pi + numpy.arange(rays) * (2 * math.pi / rays)
+    d = numpy.column_stack((numpy.cos(angles), numpy.sin(angles)))
+    ranges = numpy.full(rays, numpy.inf)
+    for cx, cy, r in circles:
+        b = d[:, 0] * cx + d[:, 1] * cy
+        disc = b * b - (cx * cx + cy * cy - r * r)
+        t = b - numpy.sqrt(numpy.maximum(disc, 0.0))
+        hit = (disc >= 0) & (t > 0)
+        ranges = numpy.where(hit, numpy.minimum(ranges, t), ranges)
+    for (x0, y0), (x1, y1) in segments:
+        ex, ey = x1 - x0, y1 - y0
+        den = d[:, 0] * ey - d[:, 1] * ex
+        with numpy.errstate(divide='ignore', invalid='ignore'):
+            t = (x0 * ey - y0 * ex) / den
+            u = (x0 * d[:, 1] - y0 * d[:, 0]) / den
+        hit = (numpy.abs(den) > 1e-12) & (t > 0) & (u >= 0) & (u <= 1)
+        ranges = numpy.where(hit, numpy.minimum(ranges, t), ranges)
+    ranges = numpy.where(ranges > range_max, numpy.inf, ranges)
+    return Scan(0.0, 'base_scan', -math.pi, -math.pi + (rays - 1) * 2 * math.pi / rays, 2 * math.pi / rays,
+                0.0, 0.1, 0.12, range_max, ranges)
+
+
+def run(scan, goal=(10.0, 0.0), v0=0.5, w0=0.0, footprint=FOOTPRINT, **overrides):
+    return plan(scan, LASER, footprint, v0, w0, goal, NavigatorSettings(**overrides))
+
+
+def test_open_floor_heads_straight_for_the_goal_at_full_speed():
+    p = run(scan_of())
+    assert p.kind == 'goal' and p.linear_x == pytest.approx(0.5) and abs(p.angular_z) < 0.05
+
+
+def test_goal_to_the_left_turns_left():
+    assert run(scan_of(), goal=(2.0, 3.0)).angular_z > 0.3
+
+
+@pytest.mark.parametrize('side, sign', [(+1, -1), (-1, +1)])
+def test_an_obstacle_biased_to_one_side_turns_the_other_way(side, sign):
+    p = run(scan_of(circles=[(1.2, side * 0.15, 0.3)]))
+    assert p.kind == 'avoid'
+    assert numpy.sign(p.angular_z) == sign, p
+
+
+def test_a_gap_narrower_than_the_footprint_plus_margins_is_never_entered():
+    # Two posts 0.40 m apart (inner edges): the robot is 0.28 m wide, plus 0.1 m margin each side is 0.48.
+    posts = [(0.8, 0.25, 0.05), (0.8, -0.25, 0.05)]
+    wall = [((0.8, 0.3), (0.8, 3.0)), ((0.8, -0.3), (0.8, -3.0))]
+    for v0 in (0.0, 0.2):
+        p = run(scan_of(circles=posts, segments=wall), v0=v0)
+        ends = p.path[:, :2]
+        assert ends[:, 0].max() < 0.8 - 0.15 - 0.1 + 0.05, 'drove into the gap: %s' % p
+
+
+def test_a_gap_wide_enough_is_taken():
+    posts = [(1.0, 0.45, 0.05), (1.0, -0.45, 0.05)]
+    wall = [((1.0, 0.5), (1.0, 3.0)), ((1.0, -0.5), (1.0, -3.0))]
+    p = run(scan_of(circles=posts, segments=wall))
+    assert p.linear_x > 0.2 and abs(p.angular_z) < 0.3
+
+
+def test_boxed_in_gives_zero():
+    box = [((0.3, -0.25), (0.3, 0.25)), ((-0.25, -0.25), (-0.25, 0.25)), ((-0.25, 0.25), (0.3, 0.25)),
+           ((-0.25, -0.25), (0.3, -0.25))]
+    p = run(scan_of(segments=box), v0=0.0)
+    assert (p.linear_x, p.angular_z) == (0.0, 0.0)
+    assert p.kind == 'stop'
+
+
+def test_a_wall_close_ahead_turns_in_place_when_turning_is_safe():
+    # The wall is 0.30 m ahead of the robot's front: turning in place keeps the corners 0.25 m off it.
+    p = run(scan_of(segments=[((0.45, -3.0), (0.45, 3.0)), ((0.45, 3.0), (-3.0, 3.0)),
+                              ((0.45, -3.0), (-3.0, -3.0))]), v0=0.0)
+    assert p.linear_x < 0.05 and p.angular_z != 0.0
+
+
+def test_no_chosen_path_comes_within_the_margin():
+    rng = numpy.random.default_rng(7)
+    for _ in range(40):
+        circles = [(rng.uniform(0.5, 4), rng.uniform(-2, 2), rng.uniform(0.05, 0.3)) for _ in range(12)]
+        circles = [c for c in circles if math.hypot(c[0], c[1]) - c[2] > 0.5]
+        p = run(scan_of(circles=circles), v0=rng.uniform(0, 0.5), w0=rng.uniform(-1, 1))
+        if p.kind == 'stop':
+            continue
+        shape = outline(FOOTPRINT, 0.01)
+        for x, y, yaw in p.path:
+            px = x + math.cos(yaw) * shape[:, 0] - math.sin(yaw) * shape[:, 1]
+            py = y + math.sin(yaw) * shape[:, 0] + math.cos(yaw) * shape[:, 1]
+            for cx, cy, r in circles:
+                assert numpy.hypot(px - cx, py - cy).min() - r >= 0.1 - 0.01
+
+
+def test_prediction_ramps_then_brakes_to_rest():
+    s = NavigatorSettings()
+    poses = predict(0.0, 0.0, numpy.array([0.5]), numpy.array([0.0]), s, s.horizon, 40)[0]
+    step = numpy.diff(numpy.concatenate(([0.0], poses[:, 0])))
+    assert step[0] == pytest.approx(0.1 * 0.1, abs=1e-6)     # 0.1 s at 0.1 m/s (1 m/s^2 ramp)
+    assert step.max() == pytest.approx(0.05, abs=1e-6)        # 0.5 m/s, reached at the horizon
+    assert step[-1] == 0.0                                   # at rest in the end
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(NavigatorError, match='goal_xy'):
+        run(scan_of(), goal=(math.nan, 0.0))
+    with pytest.raises(NavigatorError, match='v0'):
+        run(scan_of(), v0=math.inf)
+
+
+def test_a_decision_at_720_rays_in_clutter_is_cheap():
+    rng = numpy.random.default_rng(3)
+    circles = [(rng.uniform(-4, 4), rng.uniform(-4, 4), 0.15) for _ in range(60)]
+    circles = [c for c in circles if math.hypot(c[0], c[1]) > 0.6]
+    scan = scan_of(circles=circles)
+    times = []
+    for _ in range(30):
+        t0 = time.perf_counter()
+        run(scan, footprint=JACKAL, v0=0.3)
+        times.append(time.perf_counter() - t0)
+    # Only a bound that catches a blow-up; the target (p99 < 5 ms) is measured by make bench.
+    assert numpy.median(times) < 0.05
+
+
+# --- the states, on injected time ----------------------------------------------------------------------------
+
+from closed_loop.navigator import Navigator, NavState  # noqa: E402
+
+
+def test_reaching_the_goal_gives_zero_for_good():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(1.0, 0.0))
+    step = nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert step.state is NavState.GOAL_SEEKING and step.linear_x > 0
+    step = nav.update(5.0, (0.8, 0.0, 0.0), 0.3, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert step.state is NavState.REACHED and (step.linear_x, step.angular_z) == (0.0, 0.0)
+    assert nav.update(6.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT).state is NavState.REACHED
+
+
+def test_an_obstacle_ahead_is_avoiding():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
+    step = nav.update(0.0, (0.0, 0.0, 0.0), 0.5, 0.0, scan_of(circles=[(1.2, 0.15, 0.3)]), LASER, FOOTPRINT)
+    assert step.state is NavState.AVOIDING and step.angular_z < 0
+
+
+def test_no_progress_recovers_then_fails():
+    transitions = []
+    s = NavigatorSettings(stuck_timeout=2.0, give_up_timeout=10.0)
+    nav = Navigator(s, (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0),
+                    on_transition=lambda old, new, t, why: transitions.append((new, t)))
+    wall = scan_of(segments=[((0.45, -3.0), (0.45, 3.0))])
+    states = []
+    for i in range(120):
+        t = i * 0.1
+        states.append(nav.update(t, (0.0, 0.0, 0.0), 0.0, 0.0, wall, LASER, FOOTPRINT))
+    names = [st.state for st in states]
+    assert NavState.RECOVERING in names
+    first = names.index(NavState.RECOVERING)
+    assert first * 0.1 == pytest.approx(2.0, abs=0.11)
+    backing = [st for st in states if st.reason == 'backing up']
+    assert backing and all(st.linear_x < 0 for st in backing)      # the rear is clear here
+    assert names[-1] is NavState.FAILED and (states[-1].linear_x, states[-1].angular_z) == (0.0, 0.0)
+    assert transitions[-1][0] is NavState.FAILED and transitions[-1][1] == pytest.approx(10.0, abs=0.11)
+
+
+def test_without_a_goal_it_aims_back_at_the_start_line():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0))
+    # Pushed 1 m to the left of its start line and pointing along it: it steers right, back to the line.
+    step = nav.update(0.0, (2.0, 1.0, 0.0), 0.5, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert step.angular_z < 0 and step.state is not NavState.REACHED
+    goal_local, progress = nav.target((2.0, 1.0, 0.0))
+    assert goal_local == pytest.approx((3.0, -1.0)) and progress == pytest.approx(2.0)
+
+
+def test_a_new_goal_starts_over():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(0.1, 0.0))
+    nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert nav.state is NavState.REACHED
+    nav.set_goal((5.0, 0.0), now_s=1.0)
+    assert nav.update(1.1, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT).state is NavState.GOAL_SEEKING
+    with pytest.raises(NavigatorError):
+        nav.set_goal((math.nan, 0.0), now_s=2.0)
