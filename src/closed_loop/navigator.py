@@ -28,6 +28,7 @@ import numpy
 
 from closed_loop import robot_model
 from closed_loop.guard import footprint_clearance, path_clearance, scan_points
+from closed_loop.scan import sample_angles
 from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
 
 #: Grid cell of the distance transform (m); clearances are read this much on the safe side.
@@ -87,6 +88,14 @@ class NavigatorSettings:
         if not self.give_up_timeout > self.stuck_timeout:
             raise SettingsError('~give_up_timeout: expected more than stuck_timeout (%g s), got %r'
                                 % (self.stuck_timeout, self.give_up_timeout))
+
+
+@dataclasses.dataclass
+class GoalSettings:
+    """Where avoid_obstacles heads unless ``move_base_simple/goal`` says otherwise (its ``~parameters``;
+    ``~goal_x`` and ``~goal_y``, both or neither, give the goal in odom)."""
+    goal_distance: float = param(10.0, 'm', 'with no ~goal_x/~goal_y: the goal is this far ahead along the '
+                                 'start heading; 0: no goal, hold the start heading forever', minimum=0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -295,6 +304,22 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
 
 # --- the states on top ---------------------------------------------------------------------------------------
 
+#: Backing up needs the scan to see behind: rays within this of straight back (rad).
+REAR_HALF_ANGLE_RAD = math.radians(30.0)
+
+
+def rear_seen(scan, laser_pose):
+    """True if the scan has rays toward the whole rear sector (a 270-degree LIDAR facing forward has
+    none: then what is behind is unknown, and backing up is not safe)."""
+    angles = numpy.asarray(sample_angles(scan)) + laser_pose.yaw
+    off_back = numpy.abs(numpy.arctan2(numpy.sin(angles - math.pi), numpy.cos(angles - math.pi)))
+    covered = off_back <= REAR_HALF_ANGLE_RAD
+    if not covered.any():
+        return False
+    spacing = abs(scan.angle_increment)
+    return covered.sum() * spacing >= 2 * REAR_HALF_ANGLE_RAD - 2 * spacing
+
+
 class NavState(enum.Enum):
     """What the navigator is doing (its ``~mode``)."""
     GOAL_SEEKING = 'GOAL_SEEKING'
@@ -424,7 +449,7 @@ class Navigator:
             clearance = path_clearance(points, footprint, poses)
             return clearance >= s.safety_margin or clearance >= now_clear - 1e-3
         if elapsed < BACKUP_S:
-            if safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
+            if rear_seen(scan, laser_pose) and safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
                 return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
             self._recovery['started_s'] = now_s - BACKUP_S   # the rear is not clear: go on to the turn
             elapsed = BACKUP_S

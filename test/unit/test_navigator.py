@@ -194,3 +194,15 @@ def test_a_new_goal_starts_over():
     assert nav.update(1.1, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT).state is NavState.GOAL_SEEKING
     with pytest.raises(NavigatorError):
         nav.set_goal((math.nan, 0.0), now_s=2.0)
+
+
+def test_backing_up_needs_a_scan_that_sees_behind():
+    from closed_loop.navigator import rear_seen
+    full = scan_of()
+    assert rear_seen(full, LASER)
+    front_only = Scan(0.0, 'front_laser', -2.356, 2.356, 4.712 / 719, 0.0, 0.1, 0.1, 30.0, numpy.full(720, numpy.inf))
+    assert not rear_seen(front_only, LASER)
+    s = NavigatorSettings(stuck_timeout=1.0, give_up_timeout=10.0)
+    nav = Navigator(s, (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
+    steps = [nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, front_only, LASER, FOOTPRINT) for i in range(20)]
+    assert not [st for st in steps if st.linear_x < 0]

@@ -10,7 +10,8 @@ from closed_loop.world import (NAMED_COLORS, ROBOT_CLEARANCE_RADIUS_M, Obstacle,
                                WorldError, available_worlds, load_world, parse_world, resolve_world)
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
-SHIPPED = ('corridor', 'empty', 'obstacle_course', 'red_box', 'two_robots', 'wall')
+SHIPPED = ('corridor', 'dead_end', 'empty', 'obstacle_course', 'obstacle_left', 'obstacle_right', 'red_box',
+           'slalom', 'two_robots', 'wall')
 RED = (0.9, 0.05, 0.05, 1.0)
 # Sampling step along paths and in time for the clearance checks; fine enough for 0.2 m objects.
 STEP_M = 0.05
@@ -500,7 +501,7 @@ def test_resolve_unknown_name_lists_the_available_worlds(bad, tmp_path, monkeypa
         resolve_world(bad, WORLDS_DIR)
     message = str(caught.value)
     assert message.startswith(WORLDS_DIR + ': world: expected ')
-    assert 'corridor, empty, obstacle_course, red_box, two_robots, wall' in message
+    assert ', '.join(SHIPPED) in message
     assert message.endswith('got %r' % bad)
 
 
