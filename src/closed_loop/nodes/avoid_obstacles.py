@@ -18,7 +18,7 @@ from closed_loop.guard import path_clearance, scan_points
 from closed_loop.navigator import (PREDICTION_STEP_S, GoalSettings, Navigator, NavigatorError, NavigatorSettings,
                                    predict)
 from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, frame_id, init_node, load_settings,
-                                      stamp_to_sec)
+                                      robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
 from closed_loop.scan import ScanError, validate_scan
 from closed_loop.sources import SourceCheck
@@ -57,16 +57,7 @@ class AvoidObstacles:
         self.settings = s = load_settings(NavigatorSettings)
         self.goal_settings = load_settings(GoalSettings)
         self._goal_param = self._goal_from_params()
-        urdf = rospy.get_param('robot_description', None)
-        if not isinstance(urdf, str) or not urdf.strip():
-            rospy.logfatal('no robot_description on the parameter server: the navigator needs the robot URDF')
-            raise SystemExit(1)
-        try:
-            self.footprint = robot_model.footprint(urdf)
-            self.laser_pose = robot_model.frame_pose_2d(urdf, s.scan_frame)
-        except robot_model.RobotModelError as error:
-            rospy.logfatal('%s', error)
-            raise SystemExit(1)
+        self.footprint, self.laser_pose = robot_geometry(s.scan_frame, 'the navigator')
         self.odom_frame = frame_id(ODOM_FRAME)
         self.base_frame = frame_id(robot_model.BASE_FRAME)
         self.lock = threading.Lock()

@@ -8,10 +8,9 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import LiveSettings, frame_id, init_node, load_settings
+from closed_loop.nodes.common import LiveSettings, frame_id, init_node, load_settings, robot_geometry
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -44,16 +43,7 @@ class CmdVelGuard:
 
     def __init__(self):
         self.settings = s = load_settings(GuardSettings)
-        urdf = rospy.get_param('robot_description', None)
-        if not isinstance(urdf, str) or not urdf.strip():
-            rospy.logfatal('no robot_description on the parameter server: the guard needs the robot URDF')
-            raise SystemExit(1)
-        try:
-            self.footprint = robot_model.footprint(urdf)
-            self.laser_pose = robot_model.frame_pose_2d(urdf, s.scan_frame)
-        except robot_model.RobotModelError as error:
-            rospy.logfatal('%s', error)
-            raise SystemExit(1)
+        self.footprint, self.laser_pose = robot_geometry(s.scan_frame, 'the guard')
         rospy.loginfo('footprint x %.3f..%.3f m, y %.3f..%.3f m; safety_margin %.2f m',
                       self.footprint.x_min, self.footprint.x_max, self.footprint.y_min,
                       self.footprint.y_max, s.safety_margin)

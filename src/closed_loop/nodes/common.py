@@ -123,6 +123,20 @@ class LiveSettings:
         return config
 
 
+def robot_geometry(scan_frame, needs_it):
+    """(footprint rectangle, the laser's pose in the base frame) from ``robot_description``; without a usable
+    one, log why (``needs_it``: which node needs it, for the message) and exit with status 1."""
+    urdf = rospy.get_param('robot_description', None)
+    if not isinstance(urdf, str) or not urdf.strip():
+        rospy.logfatal('no robot_description on the parameter server: %s needs the robot URDF', needs_it)
+        raise SystemExit(1)
+    try:
+        return robot_model.footprint(urdf), robot_model.frame_pose_2d(urdf, scan_frame)
+    except robot_model.RobotModelError as error:
+        rospy.logfatal('%s', error)
+        raise SystemExit(1)
+
+
 def stamp_to_sec(stamp):
     """A ``rospy.Time`` (or ``genpy.Time``) as float seconds."""
     return stamp.secs + stamp.nsecs * 1e-9
