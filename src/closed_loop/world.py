@@ -27,19 +27,11 @@ This module is ROS-free: it needs only the standard library and PyYAML.
 """
 import math
 import os
-import re
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
-from closed_loop.obstacles import disk_overlaps, footprint_overlaps
-from closed_loop.shapes import robot_corners, separated
+from closed_loop.world_robots import RobotSpec, check_robots_apart, check_start, parse_robots
 from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
-
-#: The robot as seen by the start-pose check when its footprint is not known (a world checked on its
-#: own): a disk of this radius (m) around base_footprint. With the robot's footprint (the simulator
-#: passes the rectangle from its URDF), the check is that rectangle grown by START_MARGIN_M.
-ROBOT_CLEARANCE_RADIUS_M = 0.25
-START_MARGIN_M = 0.05
 
 #: Limits checked before anything is built, so a wrong file (a log, a binary, a generated monster) is
 #: refused in moments rather than loaded for minutes: the largest world file (bytes) and the most
@@ -72,12 +64,6 @@ WORLD_FILE_SUFFIX = '.yaml'
 _TOP_KEYS = ('name', 'description', 'ground', 'robot', 'robots', 'obstacles')
 _GROUND_KEYS = ('color',)
 _ROBOT_KEYS = ('start',)
-_ROBOTS_KEYS = ('name', 'profile', 'start')
-#: A robot's name becomes its ROS namespace and TF prefix; a profile names files (urdf/NAME.urdf).
-ROBOT_NAME = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
-PROFILE_NAME = re.compile(r'^[A-Za-z0-9_]+$')
-DEFAULT_PROFILE = 'closed_loop'
-MAX_ROBOTS = 16
 _START_KEYS = ('x', 'y', 'yaw')
 _MOTION_KEYS = ('waypoints', 'speed', 'loop')
 _COMMON_OBSTACLE_KEYS = ('name', 'type', 'color')
@@ -135,15 +121,6 @@ class Obstacle:
 
 
 @dataclass(frozen=True)
-class RobotSpec:
-    """One robot of a multi-robot world: its name (its ROS namespace and TF prefix), its robot profile
-    (urdf/PROFILE.urdf, config/robots/PROFILE.yaml) and its start pose."""
-    name: str
-    profile: str
-    start: Pose2D
-
-
-@dataclass(frozen=True)
 class World:
     """A validated world: ``source`` is the file it came from, or ``"<string>"``."""
     name: str
@@ -187,7 +164,7 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
     wall, or a robot start pose where the robot would overlap an obstacle's footprint (moving
     obstacles at their start position): the robot is ``footprint`` (an object with x_min, x_max,
     y_min, y_max in m, e.g. :class:`closed_loop.robot_model.Footprint`) grown by ``START_MARGIN_M``,
-    or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M``. For a world with ``robots:``, ``footprint``
+    or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M`` (both in ``closed_loop.world_robots``). For a world with ``robots:``, ``footprint``
     is {robot name: footprint} (a robot missing from it is a disk), and no two robots may start
     overlapping. ``check_starts`` False skips the start checks (to read which robots a world has before
     their footprints are known).
@@ -212,7 +189,7 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
         robot = check.mapping(top['robot'], 'robot', _ROBOT_KEYS)
         if 'start' in robot:
             start = _parse_start(check, robot['start'], 'robot.start')
-    robots = _parse_robots(check, top['robots']) if 'robots' in top else ()
+    robots = parse_robots(check, top['robots'], _parse_start, Pose2D(0.0, 0.0, 0.0)) if 'robots' in top else ()
     if robots:
         start = robots[0].start
 
@@ -242,75 +219,13 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
     elif robots:
         footprints = footprint if isinstance(footprint, dict) else {}
         for index, spec in enumerate(robots):
-            _check_start(check, obstacles, spec.start, footprints.get(spec.name), 'robots[%d].start' % index)
-        _check_robots_apart(check, robots, footprints)
+            check_start(check, obstacles, spec.start, footprints.get(spec.name), 'robots[%d].start' % index)
+        check_robots_apart(check, robots, footprints)
     else:
-        _check_start(check, obstacles, start, None if isinstance(footprint, dict) else footprint, 'robot.start')
+        check_start(check, obstacles, start, None if isinstance(footprint, dict) else footprint, 'robot.start')
 
     return World(name=name, description=description, source=source, ground_color=ground_color,
                  robot_start=start, obstacles=tuple(obstacles), robots=robots)
-
-
-def _parse_robots(check, value):
-    if not isinstance(value, list) or not value:
-        check.fail('robots', 'a list of at least one robot {name, profile, start}', value)
-    if len(value) > MAX_ROBOTS:
-        check.fail('robots', 'at most %d robots' % MAX_ROBOTS, '%d robots' % len(value))
-    robots, seen = [], {}
-    for index, raw in enumerate(value):
-        field = 'robots[%d]' % index
-        robot = check.mapping(raw, field, _ROBOTS_KEYS)
-        name = check.get(robot, 'name', field + '.name')
-        if not isinstance(name, str) or not ROBOT_NAME.match(name):
-            check.fail(field + '.name', 'a name of letters, digits and _, starting with a letter (it becomes '
-                       'the namespace and TF prefix)', name)
-        if name in seen:
-            check.fail(field + '.name', 'a name not already used by robots[%d]' % seen[name], name)
-        seen[name] = index
-        profile = robot.get('profile', DEFAULT_PROFILE)
-        if not isinstance(profile, str) or not PROFILE_NAME.match(profile):
-            check.fail(field + '.profile', 'a robot profile name (letters, digits, _; urdf/NAME.urdf)', profile)
-        start = _parse_start(check, robot['start'], field + '.start') if 'start' in robot else Pose2D(0.0, 0.0, 0.0)
-        robots.append(RobotSpec(name, profile, start))
-    return tuple(robots)
-
-
-def _check_start(check, obstacles, start, footprint, field):
-    """The robot at ``start`` (its ``footprint`` plus START_MARGIN_M, or a disk without one) is clear of
-    every obstacle (moving ones at their start)."""
-    for index, obstacle in enumerate(obstacles):
-        if footprint is None and disk_overlaps(obstacle, start.x, start.y, ROBOT_CLEARANCE_RADIUS_M):
-            check.fail(field,
-                       'a pose at least %g m (the robot clearance radius) from obstacles[%d] %r'
-                       % (ROBOT_CLEARANCE_RADIUS_M, index, obstacle.name),
-                       {'x': start.x, 'y': start.y, 'yaw': start.yaw})
-        if footprint is not None and footprint_overlaps(obstacle, start, footprint, START_MARGIN_M):
-            check.fail(field,
-                       'a pose where the robot (%.2f x %.2f m, plus %g m) is clear of obstacles[%d] %r'
-                       % (footprint.x_max - footprint.x_min, footprint.y_max - footprint.y_min,
-                          START_MARGIN_M, index, obstacle.name),
-                       {'x': start.x, 'y': start.y, 'yaw': start.yaw})
-
-
-def _rect(footprint):
-    """The rectangle (x_min, x_max, y_min, y_max) a robot is checked with: its footprint plus the margin,
-    or the square around the clearance disk without one."""
-    if footprint is None:
-        r = ROBOT_CLEARANCE_RADIUS_M
-        return (-r, r, -r, r)
-    m = START_MARGIN_M
-    return (footprint.x_min - m, footprint.x_max + m, footprint.y_min - m, footprint.y_max + m)
-
-
-def _check_robots_apart(check, robots, footprints):
-    """No two robots start overlapping."""
-    for i, a in enumerate(robots):
-        for j in range(i):
-            b = robots[j]
-            if not separated(robot_corners(a.start, _rect(footprints.get(a.name))),
-                             robot_corners(b.start, _rect(footprints.get(b.name)))):
-                check.fail('robots[%d].start' % i, 'a pose clear of robots[%d] %r' % (j, b.name),
-                           {'x': a.start.x, 'y': a.start.y, 'yaw': a.start.yaw})
 
 
 def _parse_start(check, value, field):

@@ -5,7 +5,8 @@ import time
 import numpy
 import pytest
 
-from closed_loop.navigator import NavigatorError, NavigatorSettings, outline, plan, predict
+from closed_loop.local_planner import NavigatorError, outline, plan, predict
+from closed_loop.navigator import NavigatorSettings
 from closed_loop.robot_model import Footprint, Pose2DInBase
 from closed_loop.scan import Scan
 

@@ -15,8 +15,8 @@ from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.geometry import quaternion_yaw
 from closed_loop.guard import path_clearance, scan_points
-from closed_loop.navigator import (PREDICTION_STEP_S, GoalSettings, Navigator, NavigatorError, NavigatorSettings,
-                                   predict)
+from closed_loop.local_planner import PREDICTION_STEP_S, NavigatorError, predict
+from closed_loop.navigator import GoalSettings, Navigator, NavigatorSettings
 from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, frame_id, init_node, load_settings,
                                       robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist

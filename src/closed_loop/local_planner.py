@@ -1,0 +1,252 @@
+"""The reactive navigator's local planner: a dynamic window over (v, w), each candidate's path predicted and
+checked against the scan with the robot's footprint rectangle, the safe ones scored toward the goal. Its
+settings and the states on top are in ``closed_loop.navigator``.
+
+Why a dynamic window (Fox, Burgard and Thrun 1997; ROS's dwa_local_planner): it plans in the robot's own
+command space, so speed and acceleration limits hold by construction; it judges a command by the path the
+robot would sweep, with its real rectangle, not a point or a disc, so it neither enters a gap narrower
+than the robot nor cuts a corner; and it needs no map, only the newest scan. A gap-following or VFH+
+histogram picks a direction and leaves the footprint to a margin; the window checks the footprint itself.
+
+Safety: each candidate is followed for ``horizon`` seconds (a control period and the scan's delay, with room
+to spare) and then braked to rest at the robot's deceleration; its clearance is the least distance between
+the footprint, at every predicted pose, and any scan point. A command whose clearance comes under
+``safety_margin`` is never chosen (when the robot is already closer than the margin, only a turn in place
+that does not bring it closer is). With no safe command it stops. Preference: each candidate is also
+followed for ``lookahead`` seconds without braking, and scored on where that arc points (toward the goal),
+how much room it keeps, how fast it goes, and how long it runs before it would come within the margin.
+The robot re-plans every period, so the long arc is a preference, the short one a guarantee.
+
+The clearance comes from a distance transform of the scan points on a local grid (OpenCV), read at points
+along the footprint's outline, so a decision costs a few milliseconds at 720 rays (``make bench``). Free
+of ROS.
+"""
+import dataclasses
+import math
+
+import cv2
+import numpy
+
+from closed_loop.guard import footprint_clearance, path_clearance, scan_points
+
+#: Grid cell of the distance transform (m); clearances are read this much on the safe side.
+GRID_CELL_M = 0.04
+#: Step between predicted poses (s), and the largest gap between samples of the footprint's outline (m):
+#: between two samples or two poses an obstacle point cannot slip through more than the margin allows.
+PREDICTION_STEP_S = 0.1
+OUTLINE_STEP_M = 0.05
+#: Step between the poses of the longer arcs that are only scored (s).
+PREFERENCE_STEP_S = 0.2
+#: Clearance beyond which more room adds nothing to a command's score (m).
+CLEARANCE_CAP_M = 1.0
+#: Candidates per axis of the window.
+LINEAR_SAMPLES = 5
+ANGULAR_SAMPLES = 15
+
+
+class NavigatorError(ValueError):
+    """Unusable input to the planner (a bad pose, goal or speed)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """The planner's answer: the command (m/s, rad/s), what it is and why, the chosen path's least
+    clearance (m), the predicted poses of the chosen command ((K, 3) x, y, yaw in the robot's frame), and
+    every candidate's (v, w, clearance, safe) for display."""
+    linear_x: float
+    angular_z: float
+    kind: str          # 'goal' (heading for it), 'avoid' (steering around), 'turn' (in place), 'stop'
+    reason: str
+    clearance_m: float
+    path: numpy.ndarray
+    candidates: numpy.ndarray
+
+
+def outline(footprint, step_m=OUTLINE_STEP_M):
+    """Points (M, 2) along the footprint rectangle's edges, at most ``step_m`` apart, corners included."""
+    x0, x1, y0, y1 = footprint.x_min, footprint.x_max, footprint.y_min, footprint.y_max
+    nx = max(1, int(math.ceil((x1 - x0) / step_m)))
+    ny = max(1, int(math.ceil((y1 - y0) / step_m)))
+    xs, ys = numpy.linspace(x0, x1, nx + 1), numpy.linspace(y0, y1, ny + 1)
+    return numpy.unique(numpy.concatenate([
+        numpy.column_stack((xs, numpy.full_like(xs, y0))), numpy.column_stack((xs, numpy.full_like(xs, y1))),
+        numpy.column_stack((numpy.full_like(ys, x0), ys)), numpy.column_stack((numpy.full_like(ys, x1), ys))]),
+        axis=0)
+
+
+class DistanceField:
+    """Distance (m) from any point of a square around the robot to the nearest scan point, for the planner.
+
+    Cells beyond the square read as ``reach_m`` (the square is sized so no predicted pose leaves it). A
+    reading is lowered by one cell's diagonal, so the field never overstates a clearance.
+    """
+
+    def __init__(self, points, reach_m):
+        self.cell = GRID_CELL_M
+        self.half = int(math.ceil(reach_m / self.cell))
+        self.size = size = 2 * self.half + 1
+        self.reach_m = reach_m
+        free = numpy.full((size, size), 255, numpy.uint8)
+        if len(points):
+            ij = numpy.round(points / self.cell).astype(numpy.int64) + self.half
+            inside = (ij[:, 0] >= 0) & (ij[:, 0] < size) & (ij[:, 1] >= 0) & (ij[:, 1] < size)
+            free[ij[inside, 1], ij[inside, 0]] = 0
+        if free.all():
+            self._flat = None
+        else:
+            field = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * self.cell \
+                - self.cell * math.sqrt(2.0)
+            # The border reads as reach_m: a lookup beyond the square is clipped onto it.
+            field[0, :] = field[-1, :] = field[:, 0] = field[:, -1] = reach_m
+            self._flat = field.ravel()
+
+    def at_xy(self, x, y):
+        """Clearance (m) at points (``x``, ``y``: arrays of one shape) in the robot's frame. The square is
+        sized so that nothing the planner asks about lies beyond it; a point that did would read the
+        border's value."""
+        if self._flat is None:
+            return numpy.full(numpy.shape(x), math.inf)
+        return self._flat.take(self.index(x, y), mode='clip')
+
+    def index(self, x, y):
+        offset = self.half + 0.5
+        ix = (x * (1.0 / self.cell) + offset).astype(numpy.intp)
+        iy = (y * (1.0 / self.cell) + offset).astype(numpy.intp)
+        return iy * self.size + ix
+
+    def at(self, xy):
+        """Clearance (m) at points ``xy`` (..., 2) in the robot's frame."""
+        return self.at_xy(xy[..., 0], xy[..., 1])
+
+
+def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
+    """Poses (C, K, 3) for candidates ``v``, ``w`` (C,) from (v0, w0): speeds move toward the candidate at the
+    accelerations for ``horizon_s``, then to zero at the same rates; K = ``steps`` poses, PREDICTION_STEP_S
+    apart (the speed of each step is the one reached at its end: the pose runs slightly ahead)."""
+    dt = step_s
+    t = numpy.arange(1, steps + 1) * dt
+    follow = t <= horizon_s + 1e-9
+
+    def speeds(start, target, rate):
+        target = numpy.asarray(target, float)[:, None]
+        along = start + numpy.clip(target - start, -rate * t, rate * t)          # ramp toward the candidate
+        at_end = start + numpy.clip(target - start, -rate * horizon_s, rate * horizon_s)
+        after = numpy.sign(at_end) * numpy.maximum(numpy.abs(at_end) - rate * (t - horizon_s), 0.0)
+        return numpy.where(follow, along, after)
+    vs = speeds(v0, v, settings.accel)
+    ws = speeds(w0, w, settings.yaw_accel)
+    yaw = numpy.cumsum(ws * dt, axis=1)
+    mid = yaw - 0.5 * ws * dt
+    x = numpy.cumsum(vs * numpy.cos(mid) * dt, axis=1)
+    y = numpy.cumsum(vs * numpy.sin(mid) * dt, axis=1)
+    return numpy.stack((x, y, yaw), axis=2).astype(numpy.float32)
+
+
+def clearances(field, shape, poses):
+    """Clearance (m) of the footprint outline ``shape`` (M, 2) at each of ``poses`` (C, K, 3): (C, K)."""
+    c, s = numpy.cos(poses[..., 2])[..., None], numpy.sin(poses[..., 2])[..., None]
+    px = poses[..., 0][..., None] + c * shape[:, 0] - s * shape[:, 1]
+    py = poses[..., 1][..., None] + s * shape[:, 0] + c * shape[:, 1]
+    return field.at_xy(px, py).min(axis=2)
+
+
+def check_finite(name, *values):
+    for value in values:
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+            raise NavigatorError('%s: expected finite numbers, got %r' % (name, values))
+
+
+def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
+    """The command for now: a :class:`Plan`.
+
+    ``scan``: a :class:`closed_loop.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
+    frame (:class:`closed_loop.robot_model.Pose2DInBase`); ``footprint``: the robot's rectangle; ``v0``,
+    ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m).
+    """
+    check_finite('v0, w0', v0, w0)
+    check_finite('goal_xy', *goal_xy)
+    s = settings
+    points = scan_points(scan, laser_pose)
+    top_v, top_w = max(s.max_speed, abs(v0)), max(s.max_yaw_rate, abs(w0))
+    safe_steps = int(math.ceil((s.horizon + top_v / s.accel + top_w / s.yaw_accel) / PREDICTION_STEP_S)) + 1
+    long_steps = int(math.ceil(s.lookahead / PREFERENCE_STEP_S))
+    radius = math.hypot(max(abs(footprint.x_min), abs(footprint.x_max)),
+                        max(abs(footprint.y_min), abs(footprint.y_max)))
+    longest_s = max(safe_steps * PREDICTION_STEP_S, long_steps * PREFERENCE_STEP_S)
+    reach = top_v * longest_s + radius + CLEARANCE_CAP_M
+    near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach] if len(points) else points
+    field = DistanceField(near, reach)
+    shape = outline(footprint).astype(numpy.float32)
+
+    # Candidates are targets over the whole speed range; each is predicted with the ramp from (v0, w0) at
+    # the accelerations, and what is sent is the first period's step of that ramp (the dynamic window).
+    vs = numpy.linspace(0.0, s.max_speed, LINEAR_SAMPLES)
+    ws = numpy.linspace(-s.max_yaw_rate, s.max_yaw_rate, ANGULAR_SAMPLES)
+    v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
+    safe_poses = predict(v0, w0, v, w, s, s.horizon, safe_steps)
+    clear = clearances(field, shape, safe_poses).min(axis=1)
+    safe = clear >= s.safety_margin
+    now = float(field.at(shape).min())
+    if now < s.safety_margin:
+        # Already within the margin: only a turn in place that brings no point closer, judged exactly (the
+        # grid is too coarse to see a centimetre), and only while the robot is nearly at rest.
+        now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
+        for i in numpy.nonzero((v == 0.0) & ~safe)[0]:
+            if abs(v0) < 0.05 and path_clearance(near, footprint, safe_poses[i]) >= now:
+                safe[i] = True
+    arcs = predict(v0, w0, v, w, s, s.lookahead, long_steps, PREFERENCE_STEP_S)
+    along = clearances(field, shape, arcs)
+    candidates = numpy.column_stack((v, w, clear, safe))
+
+    goal_distance = math.hypot(*goal_xy)
+    if not safe.any():
+        return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
+                    '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
+                    now, numpy.zeros((1, 3)), candidates)
+    # How long each arc runs before it would come within the margin (1: the whole lookahead), and how the
+    # free part of it ends: pointing at the goal, closer to it, with room around it.
+    blocked = along < s.safety_margin
+    free_steps = numpy.where(blocked.any(axis=1), blocked.argmax(axis=1), long_steps)
+    free = free_steps / long_steps
+    last = numpy.maximum(free_steps - 1, 0)
+    end = arcs[numpy.arange(len(v)), last]
+    bearing = numpy.arctan2(goal_xy[1] - end[:, 1], goal_xy[0] - end[:, 0]) - end[:, 2]
+    heading = 1.0 - numpy.abs(numpy.arctan2(numpy.sin(bearing), numpy.cos(bearing))) / math.pi
+    progress = (goal_distance - numpy.hypot(goal_xy[0] - end[:, 0], goal_xy[1] - end[:, 1])) \
+        / (s.max_speed * s.lookahead)
+    reached = numpy.arange(long_steps)[None, :] < numpy.maximum(free_steps, 1)[:, None]
+    room = numpy.minimum(numpy.where(reached, along, numpy.inf).min(axis=1), CLEARANCE_CAP_M) / CLEARANCE_CAP_M
+    speed = v / s.max_speed
+    # Near the goal, speed stops counting (no overshoot).
+    if goal_distance < s.max_speed ** 2 / (2 * s.accel) + s.goal_tolerance:
+        speed = speed * 0.0
+    # An arc that runs into the margin counts for its free part only: the sooner, the less it is worth.
+    score = (free * (s.heading_weight * heading + s.speed_weight * speed) + s.progress_weight * progress
+             + s.clearance_weight * room)
+    score = numpy.where(safe, score, -numpy.inf)
+    best = int(numpy.argmax(score))
+    turns = safe & (v == 0.0) & (w != 0.0)
+    if v[best] == 0.0 and w[best] == 0.0 and turns.any() and (v > 0).any():
+        # Standing still beats every way forward: turn in place, toward the side whose forward arcs run
+        # freer, rather than stand facing the obstacle.
+        left = free[(v > 0) & (w > 0)].max(initial=0.0)
+        right = free[(v > 0) & (w < 0)].max(initial=0.0)
+        side = numpy.sign(w) == (1.0 if left >= right else -1.0)
+        pick = turns & side if (turns & side).any() else turns
+        best = int(numpy.argmax(numpy.where(pick, numpy.abs(w), -numpy.inf)))
+    period_s = 1.0 / s.rate_hz
+    vb = float(numpy.clip(v[best], v0 - s.accel * period_s, v0 + s.accel * period_s))
+    wb = float(numpy.clip(w[best], w0 - s.yaw_accel * period_s, w0 + s.yaw_accel * period_s))
+    cb = float(along[best].min())
+    # What a pure goal-seeker would do: the moving candidate pointing best at the goal, obstacles aside.
+    moving = v > 0
+    seek = int(numpy.argmax(numpy.where(moving, heading, -numpy.inf))) if moving.any() else best
+    if v[best] == 0.0 and w[best] == 0.0:
+        kind, why = 'stop', 'stopped: nothing safe beats standing still'
+    elif v[best] == 0.0:
+        kind, why = 'turn', 'turning in place (toward %.2f rad/s): no safe way forward' % w[best]
+    elif not safe[seek] or free[seek] < 1.0 or cb < s.avoid_distance:
+        kind, why = 'avoid', 'steering around an obstacle %.2f m from the path' % max(cb, 0.0)
+    else:
+        kind, why = 'goal', 'heading for the goal %.2f m away' % goal_distance
+    return Plan(vb, wb, kind, why, cb, arcs[best], candidates)
