@@ -136,7 +136,11 @@ class Robot:
     def after_step(self, dt_s):
         """Integrate odometry from the wheels' speeds after the physics step."""
         wl, wr = self.wheel_velocities()
-        self.odometry.integrate(drive.body_twist(wl, wr, self.track_m, self.model.wheel_radius_m), dt_s)
+        twist = drive.body_twist(wl, wr, self.track_m, self.model.wheel_radius_m)
+        if self.settings.odom_yaw_rate == 'gyro':
+            _, angular = self._call(pybullet.getBaseVelocity, self.robot_id)
+            twist = drive.VelocityCommand(twist.linear_x, angular[2])
+        self.odometry.integrate(twist, dt_s)
 
     def reset(self):
         """Back at its start, at rest, with odometry at zero."""
@@ -194,6 +198,13 @@ class Robot:
         solids = self.obstacle_ids
         return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] in solids}
 
+    def clearance(self, max_m):
+        """Least distance (m) between this robot's collision shapes and any obstacle or other robot, looked
+        for up to ``max_m`` (inf when nothing is that close; 0 or less in contact)."""
+        found = [c[8] for uid in self.obstacle_ids
+                 for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)]
+        return min(found, default=float('inf'))
+
     def within(self, uid, distance_m):
         """True if this robot is within ``distance_m`` of body ``uid``."""
         return bool(self._call(pybullet.getClosestPoints, self.robot_id, uid, distance_m))
@@ -206,7 +217,7 @@ class RobotView:
 
     _ROBOT = ('model', 'settings', 'robot_id', 'odometry', 'watchdog', 'track_m', 'name', 'command',
               'wheel_velocities', 'wheel_joint_states', 'ground_truth', 'link_pose', 'commanded_twist',
-              'obstacle_ids', 'contacts_with_obstacles', 'within', 'cast_rays')
+              'obstacle_ids', 'contacts_with_obstacles', 'within', 'cast_rays', 'clearance')
 
     def __init__(self, sim, robot):
         self._sim = sim

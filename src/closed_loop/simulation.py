@@ -51,6 +51,9 @@ class SimSettings:
     wheel_sideways_friction: float = param(1.0, '', "a wheel's friction along its axle, as a fraction of its "
                                            'friction when rolling (tyres slide sideways more easily; a skid-steer '
                                            'base turns by it)', minimum=0.01, maximum=1.0)
+    odom_yaw_rate: str = param('wheels', '', "where odometry's yaw rate comes from: 'wheels' (the wheel speeds and "
+                               "track, as diff_drive_controller) or 'gyro' (an IMU's yaw rate, as a skid-steer "
+                               "base's EKF fuses it; the linear speed stays the wheels')", choices=('wheels', 'gyro'))
     # Which URDF frames and joints play which part; a robot profile (config/robots/<name>.yaml) sets them.
     base_frame: str = param(robot_model.BASE_FRAME, '', "the robot's root link on the ground (REP 105)")
     body_link: str = param(robot_model.BODY_LINK, '', 'the link whose collision shapes slide (casters)')
@@ -162,6 +165,7 @@ class Simulation:
     commanded_twist = _first_robot('commanded_twist')
     contacts_with_obstacles = _first_robot('contacts_with_obstacles')
     within = _first_robot('within')
+    clearance = _first_robot('clearance')
     cast_rays = _first_robot('cast_rays')
 
     # -- stepping -----------------------------------------------------------------------------------------
