@@ -27,18 +27,30 @@ import math
 import cv2
 import numpy
 
+from closed_loop import wavefront
 from closed_loop.guard import footprint_clearance, path_clearance, scan_points
 
 #: Grid cell of the distance transform (m); clearances are read this much on the safe side.
 GRID_CELL_M = 0.04
-#: Step between predicted poses (s), and the largest gap between samples of the footprint's outline (m):
-#: between two samples or two poses an obstacle point cannot slip through more than the margin allows.
+#: Step between predicted poses (s): between two poses an obstacle point cannot slip through more than the
+#: margin allows.
 PREDICTION_STEP_S = 0.1
-OUTLINE_STEP_M = 0.05
+#: Largest gap between samples of the footprint's outline (m) on the checked paths, and on the longer arcs
+#: that are only scored. A reading between samples is bounded exactly (see :func:`edge_clearance`).
+OUTLINE_STEP_M = 0.1
+PREFERENCE_OUTLINE_STEP_M = 0.2
 #: Step between the poses of the longer arcs that are only scored (s).
 PREFERENCE_STEP_S = 0.2
 #: Clearance beyond which more room adds nothing to a command's score (m).
 CLEARANCE_CAP_M = 1.0
+#: The way to the aim must be this much wider (m, each side) than the robot plus its margins: a gap the
+#: window could only just pass is not one to aim for.
+AIM_ROOM_M = 0.05
+#: How much the grid's clearance can read below the truth (m): a cell's diagonal (the point's and the
+#: query's places in their cells) and half the outline's sample gap.
+FIELD_ERROR_M = GRID_CELL_M * math.sqrt(2.0) + 0.5 * OUTLINE_STEP_M
+#: At most this many candidates in doubt are checked exactly per decision (each costs about 0.1 ms).
+EXACT_CHECKS = 6
 #: Candidates per axis of the window.
 LINEAR_SAMPLES = 5
 ANGULAR_SAMPLES = 15
@@ -52,7 +64,7 @@ class NavigatorError(ValueError):
 class Plan:
     """The planner's answer: the command (m/s, rad/s), what it is and why, the chosen path's least
     clearance (m), the predicted poses of the chosen command ((K, 3) x, y, yaw in the robot's frame), and
-    every candidate's (v, w, clearance, safe) for display."""
+    every candidate's (v, w, clearance, safe) and the point aimed at, for display."""
     linear_x: float
     angular_z: float
     kind: str          # 'goal' (heading for it), 'avoid' (steering around), 'turn' (in place), 'stop'
@@ -60,6 +72,7 @@ class Plan:
     clearance_m: float
     path: numpy.ndarray
     candidates: numpy.ndarray
+    aim_xy: tuple = (0.0, 0.0)   # the point the arcs were scored toward (the robot's frame, m)
 
 
 def outline(footprint, step_m=OUTLINE_STEP_M):
@@ -142,12 +155,27 @@ def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
     return numpy.stack((x, y, yaw), axis=2).astype(numpy.float32)
 
 
-def clearances(field, shape, poses):
-    """Clearance (m) of the footprint outline ``shape`` (M, 2) at each of ``poses`` (C, K, 3): (C, K)."""
+def edge_clearance(sampled, step_m):
+    """The least clearance (m) of the whole outline, given the least one over its samples (``sampled``, m)
+    taken at most ``step_m`` apart with the corners among them.
+
+    An obstacle point P nearest to an edge's inner point E (the foot of P's perpendicular) lies within
+    ``step_m / 2`` of E's nearest sample S along the edge, so ``|PS|^2 = |PE|^2 + |ES|^2``: the edge is at
+    least ``sqrt(sampled^2 - (step_m / 2)^2)`` from P. P nearest to a corner is ``sampled`` away or more.
+    """
+    half = 0.5 * step_m
+    sampled = numpy.asarray(sampled)
+    return numpy.where(sampled > half, numpy.sqrt(numpy.maximum(sampled * sampled - half * half, 0.0)),
+                       sampled - half)
+
+
+def clearances(field, shape, poses, step_m):
+    """Clearance (m) of the footprint outline ``shape`` (M, 2, samples at most ``step_m`` apart) at each of
+    ``poses`` (C, K, 3): (C, K)."""
     c, s = numpy.cos(poses[..., 2])[..., None], numpy.sin(poses[..., 2])[..., None]
     px = poses[..., 0][..., None] + c * shape[:, 0] - s * shape[:, 1]
     py = poses[..., 1][..., None] + s * shape[:, 0] + c * shape[:, 1]
-    return field.at_xy(px, py).min(axis=2)
+    return edge_clearance(field.at_xy(px, py).min(axis=2), step_m)
 
 
 def check_finite(name, *values):
@@ -156,12 +184,32 @@ def check_finite(name, *values):
             raise NavigatorError('%s: expected finite numbers, got %r' % (name, values))
 
 
-def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
+def _confirm(score, safe, maybe, near, footprint, poses, margin):
+    """The best-scoring candidate that is safe: one the grid left in doubt (``maybe``) is checked exactly
+    against the points, best first, at most EXACT_CHECKS of them; ``safe`` and ``score`` are updated.
+    None when none is safe."""
+    for _ in range(EXACT_CHECKS):
+        best = int(numpy.argmax(score))
+        if score[best] == -numpy.inf or safe[best]:
+            break
+        maybe[best] = False
+        if path_clearance(near, footprint, poses[best]) >= margin:
+            safe[best] = True
+        else:
+            score[best] = -numpy.inf
+    score[~safe] = -numpy.inf
+    best = int(numpy.argmax(score))
+    return best if safe[best] else None
+
+
+def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None):
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
     frame (:class:`closed_loop.robot_model.Pose2DInBase`); ``footprint``: the robot's rectangle; ``v0``,
-    ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m).
+    ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m);
+    ``remembered``: (M, 2) points of earlier scans in the robot's frame (``closed_loop.scan_memory``), used
+    to choose the way around, never to judge safety.
     """
     check_finite('v0, w0', v0, w0)
     check_finite('goal_xy', *goal_xy)
@@ -176,7 +224,8 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
     reach = top_v * longest_s + radius + CLEARANCE_CAP_M
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach] if len(points) else points
     field = DistanceField(near, reach)
-    shape = outline(footprint).astype(numpy.float32)
+    shape = outline(footprint, OUTLINE_STEP_M).astype(numpy.float32)
+    coarse = outline(footprint, PREFERENCE_OUTLINE_STEP_M).astype(numpy.float32)
 
     # Candidates are targets over the whole speed range; each is predicted with the ramp from (v0, w0) at
     # the accelerations, and what is sent is the first period's step of that ramp (the dynamic window).
@@ -184,37 +233,49 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
     ws = numpy.linspace(-s.max_yaw_rate, s.max_yaw_rate, ANGULAR_SAMPLES)
     v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
     safe_poses = predict(v0, w0, v, w, s, s.horizon, safe_steps)
-    clear = clearances(field, shape, safe_poses).min(axis=1)
+    clear = clearances(field, shape, safe_poses, OUTLINE_STEP_M).min(axis=1)
     safe = clear >= s.safety_margin
-    now = float(field.at(shape).min())
+    # The grid reads low by up to FIELD_ERROR_M: a candidate that reads that little short of the margin may
+    # yet keep it, and is checked exactly if it scores best (below).
+    maybe = ~safe & (clear >= s.safety_margin - FIELD_ERROR_M)
+    now = float(edge_clearance(field.at(shape).min(), OUTLINE_STEP_M))
+    if now < s.safety_margin:
+        now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
     if now < s.safety_margin:
         # Already within the margin: only a turn in place that brings no point closer, judged exactly (the
         # grid is too coarse to see a centimetre), and only while the robot is nearly at rest.
-        now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
+        maybe[:] = False
         for i in numpy.nonzero((v == 0.0) & ~safe)[0]:
             if abs(v0) < 0.05 and path_clearance(near, footprint, safe_poses[i]) >= now:
                 safe[i] = True
     arcs = predict(v0, w0, v, w, s, s.lookahead, long_steps, PREFERENCE_STEP_S)
-    along = clearances(field, shape, arcs)
+    along = clearances(field, coarse, arcs, PREFERENCE_OUTLINE_STEP_M)
     candidates = numpy.column_stack((v, w, clear, safe))
 
     goal_distance = math.hypot(*goal_xy)
-    if not safe.any():
+    # What the arcs are scored toward: a point along the way to the goal through the free space the scan
+    # shows (closed_loop.wavefront), or the goal itself when it shows none.
+    half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
+    seen = points if remembered is None or not len(remembered) else numpy.concatenate((points, remembered))
+    aim_xy = wavefront.aim(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead))
+    aim_xy = aim_xy or goal_xy
+    if not (safe | maybe).any():
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
                     '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
-                    now, numpy.zeros((1, 3)), candidates)
-    # How long each arc runs before it would come within the margin (1: the whole lookahead), and how the
-    # free part of it ends: pointing at the goal, closer to it, with room around it.
-    blocked = along < s.safety_margin
+                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+    # How long each arc runs before it would come within the margin (1: the whole lookahead), and where its
+    # free part comes closest to the goal (its end, unless it passes the goal): how far that is, how much
+    # closer than now, pointing how well at the goal, with how much room around it.
+    blocked = along < s.safety_margin - FIELD_ERROR_M / 2   # the grid's middle estimate: a preference only
     free_steps = numpy.where(blocked.any(axis=1), blocked.argmax(axis=1), long_steps)
     free = free_steps / long_steps
-    last = numpy.maximum(free_steps - 1, 0)
-    end = arcs[numpy.arange(len(v)), last]
-    bearing = numpy.arctan2(goal_xy[1] - end[:, 1], goal_xy[0] - end[:, 0]) - end[:, 2]
-    heading = 1.0 - numpy.abs(numpy.arctan2(numpy.sin(bearing), numpy.cos(bearing))) / math.pi
-    progress = (goal_distance - numpy.hypot(goal_xy[0] - end[:, 0], goal_xy[1] - end[:, 1])) \
-        / (s.max_speed * s.lookahead)
     reached = numpy.arange(long_steps)[None, :] < numpy.maximum(free_steps, 1)[:, None]
+    to_aim = numpy.hypot(aim_xy[0] - arcs[..., 0], aim_xy[1] - arcs[..., 1])
+    last = numpy.argmin(numpy.where(reached, to_aim, numpy.inf), axis=1)
+    end = arcs[numpy.arange(len(v)), last]
+    bearing = numpy.arctan2(aim_xy[1] - end[:, 1], aim_xy[0] - end[:, 0]) - end[:, 2]
+    heading = 1.0 - numpy.abs(numpy.arctan2(numpy.sin(bearing), numpy.cos(bearing))) / math.pi
+    progress = (math.hypot(*aim_xy) - to_aim[numpy.arange(len(v)), last]) / (s.max_speed * s.lookahead)
     room = numpy.minimum(numpy.where(reached, along, numpy.inf).min(axis=1), CLEARANCE_CAP_M) / CLEARANCE_CAP_M
     speed = v / s.max_speed
     # Near the goal, speed stops counting (no overshoot).
@@ -223,8 +284,13 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
     # An arc that runs into the margin counts for its free part only: the sooner, the less it is worth.
     score = (free * (s.heading_weight * heading + s.speed_weight * speed) + s.progress_weight * progress
              + s.clearance_weight * room)
-    score = numpy.where(safe, score, -numpy.inf)
-    best = int(numpy.argmax(score))
+    score = numpy.where(safe | maybe, score, -numpy.inf)
+    best = _confirm(score, safe, maybe, near, footprint, safe_poses, s.safety_margin)
+    candidates[:, 3] = safe
+    if best is None:
+        return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
+                    '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
+                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
     turns = safe & (v == 0.0) & (w != 0.0)
     if v[best] == 0.0 and w[best] == 0.0 and turns.any() and (v > 0).any():
         # Standing still beats every way forward: turn in place, toward the side whose forward arcs run
@@ -234,9 +300,14 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
         side = numpy.sign(w) == (1.0 if left >= right else -1.0)
         pick = turns & side if (turns & side).any() else turns
         best = int(numpy.argmax(numpy.where(pick, numpy.abs(w), -numpy.inf)))
+    # The step toward the target that one period allows from the measured speeds, within the limits: a
+    # robot measured faster than its limit (a skid-steer base can overshoot a turn) is sent back within
+    # them, not a period's step below what it does.
     period_s = 1.0 / s.rate_hz
-    vb = float(numpy.clip(v[best], v0 - s.accel * period_s, v0 + s.accel * period_s))
-    wb = float(numpy.clip(w[best], w0 - s.yaw_accel * period_s, w0 + s.yaw_accel * period_s))
+    vb = float(numpy.clip(numpy.clip(v[best], v0 - s.accel * period_s, v0 + s.accel * period_s),
+                          -s.max_speed, s.max_speed))
+    wb = float(numpy.clip(numpy.clip(w[best], w0 - s.yaw_accel * period_s, w0 + s.yaw_accel * period_s),
+                          -s.max_yaw_rate, s.max_yaw_rate))
     cb = float(along[best].min())
     # What a pure goal-seeker would do: the moving candidate pointing best at the goal, obstacles aside.
     moving = v > 0
@@ -249,4 +320,4 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings):
         kind, why = 'avoid', 'steering around an obstacle %.2f m from the path' % max(cb, 0.0)
     else:
         kind, why = 'goal', 'heading for the goal %.2f m away' % goal_distance
-    return Plan(vb, wb, kind, why, cb, arcs[best], candidates)
+    return Plan(vb, wb, kind, why, cb, arcs[best], candidates, tuple(aim_xy))

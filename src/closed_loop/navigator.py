@@ -16,6 +16,7 @@ from closed_loop import robot_model
 from closed_loop.guard import footprint_clearance, path_clearance, scan_points
 from closed_loop.local_planner import PREDICTION_STEP_S, check_finite, plan, predict
 from closed_loop.scan import sample_angles
+from closed_loop.scan_memory import ScanMemory
 from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
 
 
@@ -40,8 +41,11 @@ class NavigatorSettings:
                            '(control period, scan delay and room to spare)', minimum=0.1, maximum=3.0, live=True)
     lookahead: float = param(2.0, 's', 'preference: how far along each candidate arc is scored', minimum=0.5,
                              maximum=6.0, live=True)
-    goal_tolerance: float = param(0.3, 'm', 'REACHED within this distance of the goal', minimum=0.05,
+    goal_tolerance: float = param(0.2, 'm', 'REACHED within this distance of the goal', minimum=0.05,
                                   live=True)
+    memory_time: float = param(10.0, 's', 'scan points are remembered this long (in odom) to choose the way '
+                               'around; safety judges the newest scan alone; 0: no memory', minimum=0.0,
+                               maximum=120.0, live=True)
     hold_lookahead: float = param(3.0, 'm', 'with no goal: aim this far ahead along the start heading',
                                   minimum=0.5, live=True)
     stuck_timeout: float = param(6.0, 's', 'RECOVERING after this long without getting closer to the goal',
@@ -131,6 +135,8 @@ class Navigator:
         self._on_transition = on_transition
         self.state = NavState.GOAL_SEEKING
         self._side = 1.0
+        self._memory = ScanMemory(settings.memory_time)
+        self._remembered_scan = None
         self.set_goal(goal_xy)
 
     def set_goal(self, goal_xy, now_s=None):
@@ -147,6 +153,7 @@ class Navigator:
 
     def reconfigure(self, settings):
         self.settings = settings
+        self._memory.memory_s = settings.memory_time
 
     def target(self, pose):
         """The point aimed at, in the robot's frame, and the measure of progress (larger is better)."""
@@ -194,7 +201,10 @@ class Navigator:
             step = self._recover(now_s, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
-        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s)
+        if scan is not self._remembered_scan:
+            self._remembered_scan = scan
+            self._memory.add(now_s, pose, scan_points(scan, laser_pose), scan, laser_pose)
+        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose))
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
         return Step(state, p.linear_x, p.angular_z, p.reason, p)

@@ -5,7 +5,9 @@ import time
 import numpy
 import pytest
 
-from closed_loop.local_planner import NavigatorError, outline, plan, predict
+from closed_loop import wavefront
+from closed_loop.guard import scan_points
+from closed_loop.local_planner import NavigatorError, edge_clearance, outline, plan, predict
 from closed_loop.navigator import NavigatorSettings
 from closed_loop.robot_model import Footprint, Pose2DInBase
 from closed_loop.scan import Scan
@@ -207,3 +209,36 @@ def test_backing_up_needs_a_scan_that_sees_behind():
     nav = Navigator(s, (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
     steps = [nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, front_only, LASER, FOOTPRINT) for i in range(20)]
     assert not [st for st in steps if st.linear_x < 0]
+
+
+def test_the_outline_bound_never_overstates_a_clearance():
+    rng = numpy.random.default_rng(3)
+    points = rng.uniform(-1.0, 1.0, (4000, 2))
+    for step_m in (0.1, 0.2):
+        sampled = outline(JACKAL, step_m)
+        fine = outline(JACKAL, 0.002)
+        for p in points[:400]:
+            bound = edge_clearance(numpy.hypot(*(sampled - p).T).min(), step_m)
+            inside = JACKAL.x_min < p[0] < JACKAL.x_max and JACKAL.y_min < p[1] < JACKAL.y_max
+            if not inside:
+                assert bound <= numpy.hypot(*(fine - p).T).min() + 1e-3
+
+
+def test_the_aim_goes_round_a_wall_by_its_open_end():
+    # A wall 1.5 m ahead from 2 m on the right to 0.6 m on the left, the goal behind it: the way is on the left.
+    wall = scan_points(scan_of(segments=[((1.5, -2.0), (1.5, 0.6))]), LASER)
+    x, y = wavefront.aim(wall, (4.0, 0.0), 0.3, 1.5)
+    assert y > 0.3 and x > 0.3
+    mirrored = wall * numpy.array([1.0, -1.0])
+    assert wavefront.aim(mirrored, (4.0, 0.0), 0.3, 1.5)[1] < -0.3
+    assert wavefront.aim(scan_points(scan_of(), LASER), (4.0, 0.0), 0.3, 1.5) == pytest.approx((1.6, 0.0), abs=0.2)
+
+
+def test_no_way_through_gives_no_aim_and_the_planner_falls_back_on_the_goal():
+    ring = scan_points(scan_of(circles=[]), LASER)
+    closed = scan_of(segments=[((1.0, -1.0), (1.0, 1.0)), ((1.0, 1.0), (-1.0, 1.0)), ((-1.0, 1.0), (-1.0, -1.0)),
+                               ((-1.0, -1.0), (1.0, -1.0))])
+    assert len(ring) == 0
+    assert wavefront.aim(scan_points(closed, LASER), (4.0, 0.0), 0.3, 1.5) is None
+    p = run(closed, goal=(4.0, 0.0), v0=0.0)
+    assert p.linear_x == 0.0 or p.clearance_m >= 0.1

@@ -46,8 +46,9 @@ class AvoidObstacles:
     frame TF can bring into odom).
     Publications: ``cmd_vel`` (geometry_msgs/Twist; zero on shutdown), ``~mode`` (std_msgs/String,
     latched: GOAL_SEEKING, AVOIDING, RECOVERING, REACHED or FAILED, ``closed_loop.navigator.NavState``),
-    ``~plan`` (visualization_msgs/MarkerArray: the chosen arc, coloured by what it is, and every candidate's
-    end, blue if safe, red if not).
+    ``~plan`` (visualization_msgs/MarkerArray: the chosen arc, coloured by what it is, every candidate's
+    end, blue if safe, red if not, and the point the arcs were scored toward), ``~goal``
+    (geometry_msgs/PoseStamped, latched: the goal being followed, in odom).
     Parameters: :class:`closed_loop.navigator.NavigatorSettings` (limits, margins, weights; live with
     dynamic_reconfigure), ``~goal_distance`` (:class:`GoalSettings`), ``~goal_x`` and ``~goal_y`` (m, in
     odom: both or neither), ``robot_description`` (the footprint and the laser's pose).
@@ -71,6 +72,7 @@ class AvoidObstacles:
         self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
         self.mode_pub = rospy.Publisher('~mode', String, queue_size=1, latch=True)
         self.plan_pub = rospy.Publisher('~plan', MarkerArray, queue_size=1)
+        self.goal_pub = rospy.Publisher('~goal', PoseStamped, queue_size=1, latch=True)
         self._source = SourceCheck(rospy.resolve_name('scan'), frame_id(s.scan_frame))
         self._tf = tf2_ros.Buffer()
         self._tf_listener = tf2_ros.TransformListener(self._tf)
@@ -153,6 +155,7 @@ class AvoidObstacles:
             d = self.goal_settings.goal_distance
             goal = (x + d * math.cos(yaw), y + d * math.sin(yaw))
         self.navigator = Navigator(self.settings, (x, y, yaw), goal, on_transition=self._on_transition)
+        self._publish_goal(goal)
         rospy.loginfo('start at (%.2f, %.2f, %.2f rad) in %s; %s', x, y, yaw, self.odom_frame,
                       'goal (%.2f, %.2f)' % goal if goal is not None else 'no goal: holding the start heading')
 
@@ -183,7 +186,18 @@ class AvoidObstacles:
             except NavigatorError as error:
                 rospy.logerr('goal ignored: %s', error)
                 return
+        self._publish_goal((gx, gy))
         rospy.loginfo('new goal (%.2f, %.2f) in %s (from %s)', gx, gy, self.odom_frame, msg.header.frame_id)
+
+    def _publish_goal(self, goal):
+        """The goal being followed on ``~goal`` (latched, in odom); none (holding the heading): not sent."""
+        if goal is None:
+            return
+        msg = PoseStamped()
+        msg.header.frame_id, msg.header.stamp = self.odom_frame, rospy.Time.now()
+        msg.pose.position.x, msg.pose.position.y = goal
+        msg.pose.orientation.w = 1.0
+        self.goal_pub.publish(msg)
 
     # -- the one decision path --------------------------------------------------------------------------------
     def control(self):
@@ -272,7 +286,14 @@ class AvoidObstacles:
                 x, y = v / w * math.sin(w * s.horizon), v / w * (1.0 - math.cos(w * s.horizon))
             ends.points.append(Point(x, y, 0.05))
             ends.colors.append(ColorRGBA(*(SAFE_COLOUR if safe else UNSAFE_COLOUR)))
-        return MarkerArray(markers=[chosen, ends])
+        # The point the arcs were scored toward: a way round the obstacles to the goal (closed_loop.wavefront).
+        aim = Marker(ns='aim', id=2, type=Marker.SPHERE, action=Marker.ADD)
+        aim.header = chosen.header
+        aim.pose.position = Point(float(plan.aim_xy[0]), float(plan.aim_xy[1]), 0.05)
+        aim.pose.orientation.w = 1.0
+        aim.scale.x = aim.scale.y = aim.scale.z = 0.12
+        aim.color = ColorRGBA(*PLAN_COLOURS['goal'])
+        return MarkerArray(markers=[chosen, ends, aim])
 
 
 def main():

@@ -1,0 +1,63 @@
+"""What the navigator remembers of recent scans: their points in ``odom``, for choosing a way around (never
+for safety, which judges the newest scan alone).
+
+A LIDAR that sweeps less than a full turn does not see behind the robot, and an obstacle hides what is
+behind it; a way chosen from the newest scan alone changes as the robot turns, and a robot can circle in a
+pocket whose exit it saw a moment ago. So the points of recent scans are kept, one per ``CELL_M`` cell
+(the newest), and dropped when older than ``memory_s`` or when a newer ray passes through them (something
+that moved away). Free of ROS.
+"""
+import math
+
+import numpy
+
+CELL_M = 0.1
+#: A remembered point this much (m) short of the newest range along its ray is seen through: gone.
+SEE_THROUGH_M = 0.15
+
+
+class ScanMemory:
+    """Remembered scan points in odom, with the time each was last seen."""
+
+    def __init__(self, memory_s):
+        self.memory_s = memory_s
+        self.xy = numpy.zeros((0, 2))
+        self.t = numpy.zeros(0)
+
+    def clear(self):
+        self.xy, self.t = numpy.zeros((0, 2)), numpy.zeros(0)
+
+    def add(self, now_s, pose, points, scan, laser_pose):
+        """Remember ``points`` ((N, 2), robot frame) of ``scan`` taken at ``pose`` (x, y, yaw in odom);
+        forget what is too old and what the scan's rays pass through."""
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        keep = self.t >= now_s - self.memory_s
+        old, old_t = self.xy[keep], self.t[keep]
+        if len(old) and scan.angle_increment > 0:
+            # The remembered points in the laser's frame: along which ray, how far.
+            bx = c * (old[:, 0] - x) + s * (old[:, 1] - y) - laser_pose.x
+            by = -s * (old[:, 0] - x) + c * (old[:, 1] - y) - laser_pose.y
+            bearing = numpy.arctan2(by, bx) - laser_pose.yaw
+            index = numpy.round((numpy.mod(bearing - scan.angle_min + math.pi, 2 * math.pi) - math.pi)
+                                / scan.angle_increment).astype(numpy.intp)
+            inside = (index >= 0) & (index < len(scan.ranges))
+            ranges = numpy.where(inside, scan.ranges[numpy.clip(index, 0, len(scan.ranges) - 1)], numpy.nan)
+            ranges = numpy.where(numpy.isposinf(ranges), scan.range_max, ranges)
+            with numpy.errstate(invalid='ignore'):
+                seen_through = numpy.hypot(bx, by) < ranges - SEE_THROUGH_M
+            old, old_t = old[~seen_through], old_t[~seen_through]
+        new = numpy.column_stack((x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]))
+        xy = numpy.concatenate((new, old))
+        t = numpy.concatenate((numpy.full(len(new), now_s), old_t))
+        # One point per cell, the newest (the new points come first, and unique keeps the first of each).
+        cells = numpy.floor(xy / CELL_M).astype(numpy.int64)
+        _, first = numpy.unique(cells[:, 0] * 1000003 + cells[:, 1], return_index=True)
+        self.xy, self.t = xy[first], t[first]
+
+    def points(self, pose):
+        """The remembered points in the robot's frame at ``pose`` (x, y, yaw in odom), (M, 2)."""
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        dx, dy = self.xy[:, 0] - x, self.xy[:, 1] - y
+        return numpy.column_stack((c * dx + s * dy, -s * dx + c * dy))

@@ -1,0 +1,122 @@
+"""Which way around: a navigation function over the newest scan, for the local planner's aim.
+
+The dynamic window (``closed_loop.local_planner``) judges commands over a couple of seconds; alone, it
+steers toward the goal's bearing and can wander into a pocket that the goal's direction leads into. So the
+aim it scores toward is not the goal itself but a point about ``aim_m`` along the shortest way to the goal
+through the free space the scan shows (Brock and Khatib's global dynamic window, 1999, with the scan as
+the map):
+
+- a grid of ``CELL_M`` cells over the box around the robot and the goal (plus ``BOX_MARGIN_M``; a goal
+  beyond ``MAX_BOX_M`` is brought in along its bearing, to the box's edge);
+- a cell is passable when it is at least the robot's half-width plus the margin from every scan point (so
+  a gap narrower than the robot plus its margins is closed; space the scan does not see counts as free);
+- a breadth-first wave from the goal over passable cells, alternating 4- and 8-neighbour steps, which
+  gives the octagonal distance (within 8% of the Euclidean), stopped once it has covered the robot;
+- from the robot (or the passable cell nearest to it, within ``START_SEARCH_M``) down the wave, ``aim_m``.
+
+No way through (the scan shows the goal closed off) leaves the goal as the aim; the state machine above
+handles a robot that gets nowhere. Free of ROS.
+"""
+import math
+
+import cv2
+import numpy
+
+CELL_M = 0.2
+FINE = 4
+BOX_MARGIN_M = 3.0
+MAX_BOX_M = 20.0
+START_SEARCH_M = 0.8
+_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+_SQUARE = numpy.ones((3, 3), numpy.uint8)
+_NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
+
+
+def _box(goal_xy):
+    """(x0, y0, columns, rows) of the grid around the robot (the origin) and the goal, capped."""
+    gx, gy = goal_xy
+    distance = math.hypot(gx, gy)
+    reach = MAX_BOX_M - 2 * BOX_MARGIN_M
+    if distance > reach:
+        gx, gy = gx * reach / distance, gy * reach / distance
+    x0, x1 = min(0.0, gx) - BOX_MARGIN_M, max(0.0, gx) + BOX_MARGIN_M
+    y0, y1 = min(0.0, gy) - BOX_MARGIN_M, max(0.0, gy) + BOX_MARGIN_M
+    return x0, y0, int(math.ceil((x1 - x0) / CELL_M)), int(math.ceil((y1 - y0) / CELL_M)), (gx, gy)
+
+
+def aim(points, goal_xy, half_width_m, aim_m):
+    """The point (x, y) in the robot's frame to steer for, or None when the points show no way to the goal.
+
+    ``points``: (N, 2) obstacle points in the robot's frame (the scan's, and those remembered of recent
+    scans); ``goal_xy``: the goal there; ``half_width_m``: how far a passable cell must be from every
+    point (the robot's half-width plus the margin)."""
+    x0, y0, cols, rows, (gx, gy) = _box(goal_xy)
+    # The room at each cell's centre, read from a distance transform FINE times finer (accurate to a fine
+    # cell's half-diagonal, where the coarse grid alone would be off by up to 0.14 m).
+    fine = CELL_M / FINE
+    occupied = numpy.full((rows * FINE, cols * FINE), 255, numpy.uint8)
+    if len(points):
+        j = ((points[:, 0] - x0) / fine).astype(numpy.intp)
+        i = ((points[:, 1] - y0) / fine).astype(numpy.intp)
+        inside = (i >= 0) & (i < rows * FINE) & (j >= 0) & (j < cols * FINE)
+        occupied[i[inside], j[inside]] = 0
+    room = cv2.distanceTransform(occupied, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)[FINE // 2::FINE, FINE // 2::FINE]
+    passable = room * fine >= half_width_m
+    goal_cell = (int((gy - y0) / CELL_M), int((gx - x0) / CELL_M))
+    start = _nearest_passable(passable, (int(-y0 / CELL_M), int(-x0 / CELL_M)))
+    if start is None or not passable[goal_cell]:
+        return None
+    steps = numpy.full((rows, cols), numpy.iinfo(numpy.int32).max, numpy.int32)
+    steps[goal_cell] = 0
+    seen = numpy.zeros((rows, cols), numpy.uint8)
+    seen[goal_cell] = 1
+    front = seen.copy()
+    open_cells = passable.astype(numpy.uint8)
+    k = 0
+    while not seen[start]:
+        k += 1
+        grown = cv2.dilate(front, _SQUARE if k % 2 else _CROSS) & open_cells & (1 - seen)
+        if not grown.any():
+            return None
+        steps[grown.astype(bool)] = k
+        seen |= grown
+        front = grown
+    # Down the wave from the start, aim_m of path. Many ways are equally short on a grid; of the steps down,
+    # the one nearest to the goal in a straight line is taken, so in the open the aim is on the goal's line.
+    i, j = start
+    gi, gj = goal_cell
+    travelled = 0.0
+    while steps[i, j] > 0 and travelled < aim_m:
+        best = None
+        for di, dj in _NEIGHBOURS:
+            ni, nj = i + di, j + dj
+            if 0 <= ni < rows and 0 <= nj < cols and steps[ni, nj] < steps[i, j]:
+                key = (steps[ni, nj], (gi - ni) ** 2 + (gj - nj) ** 2)
+                if best is None or key < best[0]:
+                    best = (key, ni, nj)
+        if best is None:
+            break
+        _, ni, nj = best
+        travelled += CELL_M * math.hypot(ni - i, nj - j)
+        i, j = ni, nj
+    if steps[i, j] == 0:
+        return goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
+    return x0 + (j + 0.5) * CELL_M, y0 + (i + 0.5) * CELL_M
+
+
+def _nearest_passable(passable, cell):
+    """The passable cell nearest to ``cell`` within START_SEARCH_M, or None."""
+    i, j = cell
+    if 0 <= i < passable.shape[0] and 0 <= j < passable.shape[1] and passable[i, j]:
+        return cell
+    reach = int(math.ceil(START_SEARCH_M / CELL_M))
+    rows, cols = passable.shape
+    best = None
+    for di in range(-reach, reach + 1):
+        for dj in range(-reach, reach + 1):
+            ni, nj = i + di, j + dj
+            if 0 <= ni < rows and 0 <= nj < cols and passable[ni, nj]:
+                d = di * di + dj * dj
+                if best is None or d < best[0]:
+                    best = (d, (ni, nj))
+    return None if best is None else best[1]
