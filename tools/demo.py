@@ -4,8 +4,11 @@ what the robot did, from the simulator's ground truth.
 
 Usage (inside ``source env.sh``): python3 tools/demo.py [--world wall] [--controller stop_on_obstacle]
                                                         [--seconds 30] [launch args, e.g. gui:=true]
+With ``--controller avoid_obstacles`` it runs avoid.launch toward the world's goal (``goal:`` in the world
+file, else 10 m ahead) and says whether and when it was reached.
 """
 import argparse
+import dataclasses
 import math
 import os
 import signal
@@ -17,7 +20,7 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import netenv, robot_model, shapes, world as world_mod  # noqa: E402
+from closed_loop import netenv, obstacles, robot_model, shapes, world as world_mod  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
 
 STATUS_PERIOD_S = 1.0
@@ -25,6 +28,10 @@ AT_REST_MPS = 0.01
 # Once the robot has moved and then stayed at rest this long, the demo has shown what it came for.
 REST_TO_FINISH_S = 2.0
 MASTER_WAIT_S = 30.0
+CLEARANCE_PERIOD_S = 0.1
+# The controller that takes a goal; its demo ends when it has reached it or given up.
+NAVIGATOR = 'avoid_obstacles'
+NAVIGATOR_DONE = ('REACHED', 'FAILED')
 
 
 def clearance_to_obstacles(world, x, y):
@@ -32,12 +39,35 @@ def clearance_to_obstacles(world, x, y):
     return min(((shapes.distance(ob, x, y), ob.name) for ob in world.obstacles), default=(math.inf, None))
 
 
+def footprint_clearance(world, outline_xy, x, y, yaw, t_s):
+    """Least distance (m) between the robot's footprint outline (points in its frame) at pose (x, y, yaw)
+    in the world and any obstacle where it is at time ``t_s``, and that obstacle's name."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    points = [(x + c * px - s * py, y + s * px + c * py) for px, py in outline_xy]
+    best = (math.inf, None)
+    for ob in world.obstacles:
+        if ob.motion is not None:
+            ox, oy = obstacles.moving_obstacle_xy(ob, max(t_s, 0.0))
+            ob = dataclasses.replace(ob, position=(ox, oy, ob.position[2]))
+        best = min(best, min(((shapes.distance(ob, px, py), ob.name) for px, py in points)))
+    return best
+
+
+def footprint_outline(footprint, step_m=0.05):
+    """Points at most ``step_m`` apart along the footprint rectangle's edges, in the robot's frame."""
+    x0, x1, y0, y1 = footprint.x_min, footprint.x_max, footprint.y_min, footprint.y_max
+    nx, ny = max(1, int(math.ceil((x1 - x0) / step_m))), max(1, int(math.ceil((y1 - y0) / step_m)))
+    xs = [x0 + (x1 - x0) * i / nx for i in range(nx + 1)]
+    ys = [y0 + (y1 - y0) * i / ny for i in range(ny + 1)]
+    return [(px, y0) for px in xs] + [(px, y1) for px in xs] + [(x0, py) for py in ys] + [(x1, py) for py in ys]
+
+
 class Monitor:
     """Subscribes to what the demo shows and keeps the latest values."""
 
-    def __init__(self, controller):
+    def __init__(self, controller, world=None, outline_xy=None):
         import rospy
-        from geometry_msgs.msg import Twist
+        from geometry_msgs.msg import PoseStamped, Twist
         from nav_msgs.msg import Odometry
         from std_msgs.msg import Bool, Float32, String, UInt32
         self.lock = threading.Lock()
@@ -52,6 +82,15 @@ class Monitor:
         self.path_m = 0.0
         self.last_xy = None
         self.zone_changes = []
+        # The closest approach of the footprint to any obstacle over the run (ground truth), checked at
+        # CLEARANCE_PERIOD_S of simulated time.
+        self.world, self.outline_xy = world, outline_xy
+        self.closest = (math.inf, None, None)     # (m, obstacle, t)
+        self._clearance_t = -math.inf
+        self.goal = None                            # the navigator's goal (odom), from its ~goal
+        self.moved_t = None                         # when the robot first moved (simulated s)
+        rospy.Subscriber('/%s/goal' % controller, PoseStamped,
+                         lambda m: self._set('goal', (m.pose.position.x, m.pose.position.y)), queue_size=1)
         rospy.Subscriber('/base_pose_ground_truth', Odometry, self._on_truth, queue_size=10)
         rospy.Subscriber('/cmd_vel', Twist, lambda m: self._set('cmd', m.linear.x), queue_size=10)
         rospy.Subscriber('/obstacle_distance', Float32, lambda m: self._set('distance', m.data), queue_size=10)
@@ -78,8 +117,18 @@ class Monitor:
             if self.last_xy is not None:
                 self.path_m += math.hypot(p.x - self.last_xy[0], p.y - self.last_xy[1])
             self.last_xy = (p.x, p.y)
+            t = msg.header.stamp.to_sec()
+            if self.outline_xy is not None and t - self._clearance_t >= CLEARANCE_PERIOD_S:
+                self._clearance_t = t
+                q = msg.pose.pose.orientation
+                clearance, name = footprint_clearance(self.world, self.outline_xy, p.x, p.y,
+                                                      quaternion_yaw((q.x, q.y, q.z, q.w)), t)
+                if clearance < self.closest[0]:
+                    self.closest = (clearance, name, t)
             speed = math.hypot(msg.twist.twist.linear.x, msg.twist.twist.linear.y)
             if speed > AT_REST_MPS * 5:
+                if not self.moved:
+                    self.moved_t = t
                 self.moved = True
                 self.rest_since = None
             elif self.rest_since is None:
@@ -118,9 +167,12 @@ def main():
     parser.add_argument('--world', default='wall')
     parser.add_argument('--controller', default='stop_on_obstacle')
     parser.add_argument('--robot', default='closed_loop', help='robot profile (config/robots/)')
-    parser.add_argument('--seconds', type=float, default=30.0, help='wall-clock bound of the run')
+    parser.add_argument('--seconds', type=float, default=None,
+                        help='wall-clock bound of the run (default 30 s; 60 s with the navigator)')
     parser.add_argument('launch_args', nargs='*', help='extra roslaunch args (name:=value)')
     args = parser.parse_args()
+    if args.seconds is None:
+        args.seconds = 60.0 if args.controller == NAVIGATOR else 30.0
     netenv.apply_loopback_defaults(os.environ)
 
     world = world_mod.load_world(world_mod.resolve_world(args.world, os.path.join(ROOT, 'worlds')))
@@ -128,6 +180,15 @@ def main():
     os.makedirs(os.path.dirname(log_path), exist_ok=True)
     cmd = ['roslaunch', 'closed_loop', 'demo.launch', 'world:=' + args.world, 'robot:=' + args.robot,
            'controller:=' + args.controller] + args.launch_args
+    if args.controller == NAVIGATOR:
+        # The navigator's own launch file, with the world's goal (brought into odom) unless one is given.
+        cmd = ['roslaunch', 'closed_loop', 'avoid.launch', 'world:=' + args.world, 'robot:=' + args.robot]
+        if world.goal is not None and not any(a.startswith(('goal_x:=', 'goal_y:=')) for a in args.launch_args):
+            start = world.robot_start
+            dx, dy = world.goal[0] - start.x, world.goal[1] - start.y
+            c, s = math.cos(start.yaw), math.sin(start.yaw)
+            cmd += ['goal_x:=%.3f' % (c * dx + s * dy), 'goal_y:=%.3f' % (-s * dx + c * dy)]
+        cmd += args.launch_args
     print('demo: %s   (full log: %s)' % (' '.join(cmd), log_path), flush=True)
     log = open(log_path, 'w')
     launch = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
@@ -141,7 +202,18 @@ def main():
                 return 1
             time.sleep(0.2)
         rospy.init_node('demo_monitor', anonymous=True, disable_signals=True)
-        mon = Monitor(args.controller)
+        outline_xy = None
+        try:
+            description = rospy.get_param('/robot_description', None)
+            deadline = time.monotonic() + MASTER_WAIT_S
+            while description is None and launch.poll() is None and time.monotonic() < deadline:
+                time.sleep(0.2)
+                description = rospy.get_param('/robot_description', None)
+            if description is not None:
+                outline_xy = footprint_outline(robot_model.footprint(description))
+        except robot_model.RobotModelError as error:
+            print('demo: no footprint for the clearance figure: %s' % error)
+        mon = Monitor(args.controller, world, outline_xy)
         started = time.monotonic()
         next_status = started
         while time.monotonic() - started < args.seconds:
@@ -153,7 +225,8 @@ def main():
             now = time.monotonic()
             with mon.lock:
                 truth, done = mon.truth, (mon.moved and mon.rest_since is not None
-                                          and now - mon.rest_since > REST_TO_FINISH_S)
+                                          and now - mon.rest_since > REST_TO_FINISH_S
+                                          and (args.controller != NAVIGATOR or mon.zone in NAVIGATOR_DONE))
                 if now >= next_status and truth is not None:
                     next_status += STATUS_PERIOD_S
                     p = truth.pose.pose.position
@@ -189,6 +262,20 @@ def main():
             if nearest is not None:
                 print('  LIDAR clearance to the nearest obstacle (%s): %.3f m; body front: about %.3f m'
                       % (nearest, clearance, clearance - model.scan_to_front_m))
+            if mon.closest[1] is not None:
+                print('  closest approach of the footprint to any obstacle: %.3f m (%s, at t=%.1fs)'
+                      % mon.closest)
+            if mon.goal is not None:
+                c, s = math.cos(start.yaw), math.sin(start.yaw)
+                gx, gy = start.x + c * mon.goal[0] - s * mon.goal[1], start.y + s * mon.goal[0] + c * mon.goal[1]
+                reached = [t for t, zone, _, _ in mon.zone_changes if zone == 'REACHED']
+                away = math.hypot(gx - p.x, gy - p.y)
+                if reached:
+                    print('  goal (%.2f, %.2f): reached %.1f s (simulated) after the robot set off, ends %.2f m '
+                          'from it' % (gx, gy, reached[0] - (mon.moved_t or 0.0), away))
+                else:
+                    print('  goal (%.2f, %.2f): not reached (mode %s), %.2f m from it'
+                          % (gx, gy, mon.zone or '-', away))
             print('  contacts: %s' % ('none' if mon.contacts == 0 else '%d (the robot touched something)'
                                       % mon.contacts))
             return 0 if mon.contacts == 0 else 1

@@ -22,6 +22,7 @@ along the footprint's outline, so a decision costs a few milliseconds at 720 ray
 of ROS.
 """
 import dataclasses
+import functools
 import math
 
 import cv2
@@ -51,6 +52,8 @@ AIM_ROOM_M = 0.05
 FIELD_ERROR_M = GRID_CELL_M * math.sqrt(2.0) + 0.5 * OUTLINE_STEP_M
 #: At most this many candidates in doubt are checked exactly per decision (each costs about 0.1 ms).
 EXACT_CHECKS = 6
+#: An aim more than this far (rad) to a side decides which way to turn in place.
+AIM_SIDE_RAD = 0.2
 #: Candidates per axis of the window.
 LINEAR_SAMPLES = 5
 ANGULAR_SAMPLES = 15
@@ -73,6 +76,14 @@ class Plan:
     path: numpy.ndarray
     candidates: numpy.ndarray
     aim_xy: tuple = (0.0, 0.0)   # the point the arcs were scored toward (the robot's frame, m)
+    target: tuple = (0.0, 0.0)   # the chosen candidate (m/s, rad/s), which the command steps toward
+
+
+@functools.lru_cache(maxsize=16)
+def _outline32(footprint, step_m):
+    points = outline(footprint, step_m).astype(numpy.float32)
+    points.flags.writeable = False
+    return points
 
 
 def outline(footprint, step_m=OUTLINE_STEP_M):
@@ -184,6 +195,16 @@ def check_finite(name, *values):
             raise NavigatorError('%s: expected finite numbers, got %r' % (name, values))
 
 
+def blind_points(points, scan, laser_pose):
+    """Those of ``points`` ((N, 2), the robot's frame) outside the scan's sweep, as seen from the laser."""
+    if scan.angle_max - scan.angle_min + scan.angle_increment >= 2 * math.pi - 1e-6 or not len(points):
+        return points[:0]
+    bearing = numpy.arctan2(points[:, 1] - laser_pose.y, points[:, 0] - laser_pose.x) - laser_pose.yaw
+    middle, half = 0.5 * (scan.angle_min + scan.angle_max), 0.5 * (scan.angle_max - scan.angle_min)
+    off = numpy.abs(numpy.arctan2(numpy.sin(bearing - middle), numpy.cos(bearing - middle)))
+    return points[off > half + scan.angle_increment]
+
+
 def _confirm(score, safe, maybe, near, footprint, poses, margin):
     """The best-scoring candidate that is safe: one the grid left in doubt (``maybe``) is checked exactly
     against the points, best first, at most EXACT_CHECKS of them; ``safe`` and ``score`` are updated.
@@ -202,19 +223,26 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
     return best if safe[best] else None
 
 
-def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None):
+def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0):
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
     frame (:class:`closed_loop.robot_model.Pose2DInBase`); ``footprint``: the robot's rectangle; ``v0``,
     ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m);
     ``remembered``: (M, 2) points of earlier scans in the robot's frame (``closed_loop.scan_memory``), used
-    to choose the way around, never to judge safety.
+    to choose the way around, and for safety only where the scanner cannot see now; ``turning``: +1 or -1 while the last decision was a
+    turn in place that way (it goes on that way rather than swing back and forth between two ways
+    round), 0 otherwise.
     """
     check_finite('v0, w0', v0, w0)
     check_finite('goal_xy', *goal_xy)
     s = settings
-    points = scan_points(scan, laser_pose)
+    scanned = scan_points(scan, laser_pose)
+    # Where the scanner cannot see (behind a LIDAR of less than a full turn), what was seen there before
+    # is the best knowledge there is: remembered points in that blind sector count for safety too, so a
+    # turn does not swing the robot's back into something it saw a moment ago.
+    points = numpy.concatenate((scanned, blind_points(remembered, scan, laser_pose))) \
+        if remembered is not None and len(remembered) else scanned
     top_v, top_w = max(s.max_speed, abs(v0)), max(s.max_yaw_rate, abs(w0))
     safe_steps = int(math.ceil((s.horizon + top_v / s.accel + top_w / s.yaw_accel) / PREDICTION_STEP_S)) + 1
     long_steps = int(math.ceil(s.lookahead / PREFERENCE_STEP_S))
@@ -224,8 +252,8 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     reach = top_v * longest_s + radius + CLEARANCE_CAP_M
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach] if len(points) else points
     field = DistanceField(near, reach)
-    shape = outline(footprint, OUTLINE_STEP_M).astype(numpy.float32)
-    coarse = outline(footprint, PREFERENCE_OUTLINE_STEP_M).astype(numpy.float32)
+    shape = _outline32(footprint, OUTLINE_STEP_M)
+    coarse = _outline32(footprint, PREFERENCE_OUTLINE_STEP_M)
 
     # Candidates are targets over the whole speed range; each is predicted with the ramp from (v0, w0) at
     # the accelerations, and what is sent is the first period's step of that ramp (the dynamic window).
@@ -256,8 +284,9 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     # What the arcs are scored toward: a point along the way to the goal through the free space the scan
     # shows (closed_loop.wavefront), or the goal itself when it shows none.
     half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
-    seen = points if remembered is None or not len(remembered) else numpy.concatenate((points, remembered))
-    aim_xy = wavefront.aim(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead))
+    seen = scanned if remembered is None or not len(remembered) else numpy.concatenate((scanned, remembered))
+    aim_xy = wavefront.aim(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
+                           0.5 * (footprint.y_max - footprint.y_min))
     aim_xy = aim_xy or goal_xy
     if not (safe | maybe).any():
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
@@ -291,15 +320,26 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
                     '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
                     now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
-    turns = safe & (v == 0.0) & (w != 0.0)
+    turns = (safe | maybe) & (v == 0.0) & (w != 0.0)
     if v[best] == 0.0 and w[best] == 0.0 and turns.any() and (v > 0).any():
-        # Standing still beats every way forward: turn in place, toward the side whose forward arcs run
-        # freer, rather than stand facing the obstacle.
-        left = free[(v > 0) & (w > 0)].max(initial=0.0)
-        right = free[(v > 0) & (w < 0)].max(initial=0.0)
-        side = numpy.sign(w) == (1.0 if left >= right else -1.0)
-        pick = turns & side if (turns & side).any() else turns
-        best = int(numpy.argmax(numpy.where(pick, numpy.abs(w), -numpy.inf)))
+        # Standing still beats every way forward: turn in place rather than stand facing the obstacle,
+        # toward the aim (the way round) when it lies to a side, else toward the side whose forward arcs
+        # run freer; the fastest such turn the footprint can make, checked exactly if the grid doubts it.
+        bearing = math.atan2(aim_xy[1], aim_xy[0])
+        if turning:
+            toward = turning
+        elif abs(bearing) > AIM_SIDE_RAD:
+            toward = math.copysign(1.0, bearing)
+        else:
+            left = free[(v > 0) & (w > 0)].max(initial=0.0)
+            right = free[(v > 0) & (w < 0)].max(initial=0.0)
+            toward = 1.0 if left >= right else -1.0
+        order = sorted(numpy.nonzero(turns)[0], key=lambda i: (numpy.sign(w[i]) != toward, -abs(w[i])))
+        for i in order[:EXACT_CHECKS]:
+            if safe[i] or path_clearance(near, footprint, safe_poses[i]) >= s.safety_margin:
+                safe[i] = candidates[i, 3] = True
+                best = int(i)
+                break
     # The step toward the target that one period allows from the measured speeds, within the limits: a
     # robot measured faster than its limit (a skid-steer base can overshoot a turn) is sent back within
     # them, not a period's step below what it does.
@@ -320,4 +360,4 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
         kind, why = 'avoid', 'steering around an obstacle %.2f m from the path' % max(cb, 0.0)
     else:
         kind, why = 'goal', 'heading for the goal %.2f m away' % goal_distance
-    return Plan(vb, wb, kind, why, cb, arcs[best], candidates, tuple(aim_xy))
+    return Plan(vb, wb, kind, why, cb, arcs[best], candidates, tuple(aim_xy), (float(v[best]), float(w[best])))

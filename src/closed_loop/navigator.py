@@ -41,10 +41,10 @@ class NavigatorSettings:
                            '(control period, scan delay and room to spare)', minimum=0.1, maximum=3.0, live=True)
     lookahead: float = param(2.0, 's', 'preference: how far along each candidate arc is scored', minimum=0.5,
                              maximum=6.0, live=True)
-    goal_tolerance: float = param(0.2, 'm', 'REACHED within this distance of the goal', minimum=0.05,
+    goal_tolerance: float = param(0.1, 'm', 'REACHED within this distance of the goal', minimum=0.05,
                                   live=True)
     memory_time: float = param(10.0, 's', 'scan points are remembered this long (in odom) to choose the way '
-                               'around; safety judges the newest scan alone; 0: no memory', minimum=0.0,
+                               'around (and, where the LIDAR cannot see, for safety); 0: no memory', minimum=0.0,
                                maximum=120.0, live=True)
     hold_lookahead: float = param(3.0, 'm', 'with no goal: aim this far ahead along the start heading',
                                   minimum=0.5, live=True)
@@ -100,6 +100,14 @@ class NavState(enum.Enum):
 PROGRESS_M = 0.1
 #: Recovery: back up at this speed for this long (if the rear is clear), then turn in place at this rate
 #: for this long toward the side not tried last time (if turning is safe).
+#: Within this distance of the goal (m), a direct approach (turn toward it at FINAL_TURN_GAIN x bearing, at
+#: most FINAL_TURN_RADPS,
+#: drive once within FINAL_DRIVE_RAD of it at FINAL_SPEED_GAIN x distance) replaces the window, if safe.
+FINAL_APPROACH_M = 1.0
+FINAL_TURN_GAIN = 1.5
+FINAL_TURN_RADPS = 1.0
+FINAL_SPEED_GAIN = 1.0
+FINAL_DRIVE_RAD = 0.5
 BACKUP_SPEED_MPS = 0.15
 BACKUP_S = 1.0
 RECOVERY_TURN_RADPS = 0.8
@@ -136,6 +144,7 @@ class Navigator:
         self.state = NavState.GOAL_SEEKING
         self._side = 1.0
         self._memory = ScanMemory(settings.memory_time)
+        self._turning = 0.0          # the way of the last turn in place, while it goes on
         self._remembered_scan = None
         self.set_goal(goal_xy)
 
@@ -204,10 +213,36 @@ class Navigator:
         if scan is not self._remembered_scan:
             self._remembered_scan = scan
             self._memory.add(now_s, pose, scan_points(scan, laser_pose), scan, laser_pose)
-        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose))
+        if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
+            step = self._final_approach(now_s, goal_local, v0, w0, scan, laser_pose, footprint)
+            if step is not None:
+                return step
+        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning)
+        self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
         return Step(state, p.linear_x, p.angular_z, p.reason, p)
+
+    def _final_approach(self, now_s, goal_local, v0, w0, scan, laser_pose, footprint):
+        """The last metre, where the window's coarse speeds would circle the goal: turn toward it, and drive
+        at it slower the closer it is, if that path keeps the margin (judged exactly); else None."""
+        s = self.settings
+        distance, bearing = math.hypot(*goal_local), math.atan2(goal_local[1], goal_local[0])
+        w = max(-FINAL_TURN_RADPS, min(FINAL_TURN_RADPS, s.max_yaw_rate, FINAL_TURN_GAIN * bearing))
+        v = 0.0 if abs(bearing) > FINAL_DRIVE_RAD else min(s.max_speed, FINAL_SPEED_GAIN * distance) * math.cos(bearing)
+        steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel + 1.0) / PREDICTION_STEP_S))
+        poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
+        if path_clearance(scan_points(scan, laser_pose), footprint, poses) < s.safety_margin:
+            return None
+        period_s = 1.0 / s.rate_hz
+        # One period's step from the measured speeds, within the limits (as the window's, local_planner).
+        v = max(-s.max_speed, min(s.max_speed, max(v0 - s.accel * period_s, min(v0 + s.accel * period_s, v))))
+        w = max(-s.max_yaw_rate, min(s.max_yaw_rate,
+                                     max(w0 - s.yaw_accel * period_s, min(w0 + s.yaw_accel * period_s, w))))
+        why = 'final approach to the goal %.2f m away' % distance
+        self._turning = 0.0
+        self._enter(NavState.GOAL_SEEKING, now_s, why)
+        return Step(NavState.GOAL_SEEKING, v, w, why)
 
     def _recover(self, now_s, v0, w0, scan, laser_pose, footprint):
         """The recovery's command now, or None when it is over (then seek again, with a fresh timer)."""

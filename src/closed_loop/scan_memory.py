@@ -1,5 +1,5 @@
-"""What the navigator remembers of recent scans: their points in ``odom``, for choosing a way around (never
-for safety, which judges the newest scan alone).
+"""What the navigator remembers of recent scans: their points in ``odom``, for choosing a way around, and
+for safety only where the scanner cannot see now (the blind sector of a LIDAR of less than a full turn).
 
 A LIDAR that sweeps less than a full turn does not see behind the robot, and an obstacle hides what is
 behind it; a way chosen from the newest scan alone changes as the robot turns, and a robot can circle in a
@@ -39,9 +39,12 @@ class ScanMemory:
             bx = c * (old[:, 0] - x) + s * (old[:, 1] - y) - laser_pose.x
             by = -s * (old[:, 0] - x) + c * (old[:, 1] - y) - laser_pose.y
             bearing = numpy.arctan2(by, bx) - laser_pose.yaw
-            index = numpy.round((numpy.mod(bearing - scan.angle_min + math.pi, 2 * math.pi) - math.pi)
+            count = len(scan.ranges)
+            index = numpy.round(numpy.mod(bearing - scan.angle_min, 2 * math.pi)
                                 / scan.angle_increment).astype(numpy.intp)
-            inside = (index >= 0) & (index < len(scan.ranges))
+            if count * scan.angle_increment >= 2 * math.pi - 1e-6:
+                index %= count       # a full turn: the last ray's neighbour is the first
+            inside = index < count
             ranges = numpy.where(inside, scan.ranges[numpy.clip(index, 0, len(scan.ranges) - 1)], numpy.nan)
             ranges = numpy.where(numpy.isposinf(ranges), scan.range_max, ranges)
             with numpy.errstate(invalid='ignore'):

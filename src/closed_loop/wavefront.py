@@ -12,7 +12,8 @@ the map):
   a gap narrower than the robot plus its margins is closed; space the scan does not see counts as free);
 - a breadth-first wave from the goal over passable cells, alternating 4- and 8-neighbour steps, which
   gives the octagonal distance (within 8% of the Euclidean), stopped once it has covered the robot;
-- from the robot (or the passable cell nearest to it, within ``START_SEARCH_M``) down the wave, ``aim_m``.
+- from the robot (or the passable cell nearest to it, within ``START_SEARCH_M``) down the wave, up to
+  ``aim_m``, as far as the way stays in a straight line of sight of the robot through passable cells.
 
 No way through (the scan shows the goal closed off) leaves the goal as the aim; the state machine above
 handles a robot that gets nowhere. Free of ROS.
@@ -23,7 +24,7 @@ import cv2
 import numpy
 
 CELL_M = 0.2
-FINE = 4
+FINE = 2
 BOX_MARGIN_M = 3.0
 MAX_BOX_M = 20.0
 START_SEARCH_M = 0.8
@@ -44,12 +45,14 @@ def _box(goal_xy):
     return x0, y0, int(math.ceil((x1 - x0) / CELL_M)), int(math.ceil((y1 - y0) / CELL_M)), (gx, gy)
 
 
-def aim(points, goal_xy, half_width_m, aim_m):
+def aim(points, goal_xy, half_width_m, aim_m, sight_m=None):
     """The point (x, y) in the robot's frame to steer for, or None when the points show no way to the goal.
 
     ``points``: (N, 2) obstacle points in the robot's frame (the scan's, and those remembered of recent
     scans); ``goal_xy``: the goal there; ``half_width_m``: how far a passable cell must be from every
-    point (the robot's half-width plus the margin)."""
+    point (the robot's half-width plus the margin); ``sight_m``: the room a straight line to the aim must
+    keep (default ``half_width_m``; the robot's half-width alone lets the aim round a corner the way
+    itself keeps the margin from)."""
     x0, y0, cols, rows, (gx, gy) = _box(goal_xy)
     # The room at each cell's centre, read from a distance transform FINE times finer (accurate to a fine
     # cell's half-diagonal, where the coarse grid alone would be off by up to 0.14 m).
@@ -62,30 +65,40 @@ def aim(points, goal_xy, half_width_m, aim_m):
         occupied[i[inside], j[inside]] = 0
     room = cv2.distanceTransform(occupied, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)[FINE // 2::FINE, FINE // 2::FINE]
     passable = room * fine >= half_width_m
+    in_sight = passable if sight_m is None else room * fine >= sight_m
     goal_cell = (int((gy - y0) / CELL_M), int((gx - x0) / CELL_M))
     start = _nearest_passable(passable, (int(-y0 / CELL_M), int(-x0 / CELL_M)))
     if start is None or not passable[goal_cell]:
         return None
-    steps = numpy.full((rows, cols), numpy.iinfo(numpy.int32).max, numpy.int32)
-    steps[goal_cell] = 0
+    # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter; ``count`` adds one
+    # per round to every cell reached, so a cell reached in round m (the goal in round 0) ends with
+    # rounds + 1 - m, from which its step count is read back.
+    left = passable.astype(numpy.uint8)
+    left[goal_cell] = 0
     seen = numpy.zeros((rows, cols), numpy.uint8)
     seen[goal_cell] = 1
+    count = seen.copy()
     front = seen.copy()
-    open_cells = passable.astype(numpy.uint8)
     k = 0
     while not seen[start]:
         k += 1
-        grown = cv2.dilate(front, _SQUARE if k % 2 else _CROSS) & open_cells & (1 - seen)
-        if not grown.any():
+        if k >= 254:
             return None
-        steps[grown.astype(bool)] = k
-        seen |= grown
+        grown = cv2.dilate(front, _SQUARE if k % 2 else _CROSS)
+        cv2.bitwise_and(grown, left, dst=grown)
+        if not cv2.countNonZero(grown):
+            return None
+        cv2.subtract(left, grown, dst=left)
+        cv2.bitwise_or(seen, grown, dst=seen)
+        cv2.add(count, seen, dst=count)
         front = grown
+    steps = numpy.where(seen > 0, k + 1 - count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
     # Down the wave from the start, aim_m of path. Many ways are equally short on a grid; of the steps down,
     # the one nearest to the goal in a straight line is taken, so in the open the aim is on the goal's line.
     i, j = start
     gi, gj = goal_cell
     travelled = 0.0
+    aim_cell = start
     while steps[i, j] > 0 and travelled < aim_m:
         best = None
         for di, dj in _NEIGHBOURS:
@@ -99,9 +112,25 @@ def aim(points, goal_xy, half_width_m, aim_m):
         _, ni, nj = best
         travelled += CELL_M * math.hypot(ni - i, nj - j)
         i, j = ni, nj
-    if steps[i, j] == 0:
+        # The aim is the farthest point of the way in sight of the start through passable cells: steering
+        # for a point beyond a bend would cut the corner into what the way goes round.
+        if not _in_sight(in_sight, start, (i, j)):
+            break
+        aim_cell = (i, j)
+    if steps[aim_cell] == 0:
         return goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
-    return x0 + (j + 0.5) * CELL_M, y0 + (i + 0.5) * CELL_M
+    return x0 + (aim_cell[1] + 0.5) * CELL_M, y0 + (aim_cell[0] + 0.5) * CELL_M
+
+
+def _in_sight(passable, a, b):
+    """True if every cell on the straight line from cell ``a`` to cell ``b`` is passable."""
+    n = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 2
+    if n == 0:
+        return True
+    t = numpy.linspace(0.0, 1.0, n + 1)
+    ii = numpy.round(a[0] + (b[0] - a[0]) * t).astype(numpy.intp)
+    jj = numpy.round(a[1] + (b[1] - a[1]) * t).astype(numpy.intp)
+    return bool(passable[ii, jj].all())
 
 
 def _nearest_passable(passable, cell):

@@ -30,6 +30,7 @@ import os
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
+from closed_loop import shapes
 from closed_loop.world_robots import RobotSpec, check_robots_apart, check_start, parse_robots
 from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
 
@@ -61,7 +62,8 @@ NAMED_COLORS = {
 OBSTACLE_TYPES = ('box', 'cylinder', 'wall')
 WORLD_FILE_SUFFIX = '.yaml'
 
-_TOP_KEYS = ('name', 'description', 'ground', 'robot', 'robots', 'obstacles')
+_TOP_KEYS = ('name', 'description', 'ground', 'robot', 'robots', 'goal', 'obstacles')
+_GOAL_KEYS = ('x', 'y')
 _GROUND_KEYS = ('color',)
 _ROBOT_KEYS = ('start',)
 _START_KEYS = ('x', 'y', 'yaw')
@@ -132,6 +134,8 @@ class World:
     #: The robots of a multi-robot world (``robots:``), in file order; empty for a world with one unnamed
     #: robot (``robot:``), whose start is ``robot_start``. With robots, ``robot_start`` is the first's.
     robots: Tuple[RobotSpec, ...] = ()
+    #: Where a navigator should go (x, y in the world frame, m), if the world says (``goal:``); None if not.
+    goal: Optional[Tuple[float, float]] = None
 
 
 # --- parsing -----------------------------------------------------------------------------------
@@ -214,6 +218,15 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
         seen[obstacle.name] = index
         obstacles.append(obstacle)
 
+    goal = None
+    if 'goal' in top:
+        raw_goal = check.mapping(top['goal'], 'goal', _GOAL_KEYS)
+        goal = tuple(check.number(check.get(raw_goal, k, 'goal.' + k), 'goal.' + k, 'a finite number (m)')
+                     for k in _GOAL_KEYS)
+        inside = [ob.name for ob in obstacles if ob.motion is None and shapes.distance(ob, *goal) <= 0.0]
+        if inside:
+            check.fail('goal', 'a point outside every obstacle', '%r, inside %s' % (list(goal), inside[0]))
+
     if not check_starts:
         pass
     elif robots:
@@ -225,7 +238,7 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
         check_start(check, obstacles, start, None if isinstance(footprint, dict) else footprint, 'robot.start')
 
     return World(name=name, description=description, source=source, ground_color=ground_color,
-                 robot_start=start, obstacles=tuple(obstacles), robots=robots)
+                 robot_start=start, obstacles=tuple(obstacles), robots=robots, goal=goal)
 
 
 def _parse_start(check, value, field):

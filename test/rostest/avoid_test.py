@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
-"""avoid.launch in one world, judged on ground truth. Parameters: ~expect: 'reached' (the goal within
-~goal_tolerance_m, REACHED, no contact) or 'trapped' (ends RECOVERING or FAILED, at rest if FAILED, no
-contact); ~hold_after_x (m, optional): with no goal, once the robot is 3 m past this x its heading is within
-10 degrees of the start heading; ~limit_s: simulated seconds allowed."""
+"""avoid.launch in one world, judged on ground truth. Parameters: ~expect: 'reached' (REACHED, ground truth
+within ~goal_radius_m of the goal, no contact), 'trapped' (ends RECOVERING or FAILED, at rest if FAILED, no
+contact) or 'hold'; ~goal_x, ~goal_y (world frame, m): the goal expected (default ~goal_distance ahead of the
+origin); ~send_goal: send that goal on move_base_simple/goal (frame world, as rviz's "2D Nav Goal" does)
+once the robot is under way, and expect it followed; ~hold_after_x (m, optional): with no goal, once the
+robot is ~passed_by_m (3 m) past this x its heading is within 10 degrees of the start heading; ~limit_s:
+simulated seconds allowed."""
 import math
 import os
 import sys
@@ -10,6 +13,7 @@ import unittest
 
 import rospy
 import rostest
+from geometry_msgs.msg import PoseStamped
 from std_msgs.msg import String, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
@@ -19,6 +23,7 @@ from closed_loop.navigator import NavState  # noqa: E402
 
 HOLD_TOLERANCE_RAD = math.radians(10.0)
 PASSED_BY_M = 3.0
+GOAL_RADIUS_M = 0.4
 AT_REST_MPS = 0.01
 
 
@@ -28,6 +33,12 @@ class Avoid(unittest.TestCase):
         expect = rospy.get_param('~expect')
         limit_s = rospy.get_param('~limit_s', 60.0)
         hold_after_x = rospy.get_param('~hold_after_x', None)
+        passed_by = rospy.get_param('~passed_by_m', PASSED_BY_M)
+        goal = (rospy.get_param('~goal_x', rospy.get_param('/avoid_obstacles/goal_distance', 10.0)),
+                rospy.get_param('~goal_y', 0.0))
+        send_goal = rospy.get_param('~send_goal', False)
+        goal_pub = rospy.Publisher('move_base_simple/goal', PoseStamped, queue_size=1, latch=True)
+        followed = harness.Latest('avoid_obstacles/goal', PoseStamped)
         truth = harness.Latest('base_pose_ground_truth', harness.Odometry, keep_all=True)
         mode = harness.Latest('avoid_obstacles/mode', String, keep_all=True)
         contacts = harness.Latest('contact_count', UInt32)
@@ -35,11 +46,18 @@ class Avoid(unittest.TestCase):
         final = {'reached': (NavState.REACHED.name,), 'trapped': (NavState.FAILED.name,), 'hold': ()}[expect]
         while not rospy.is_shutdown():
             m = truth.wait()
+            if send_goal is True and followed.msg is not None and m.header.stamp.to_sec() - start > 1.0:
+                send_goal = 'sent'   # once, under way, after the navigator's own default goal
+                msg = PoseStamped()
+                msg.header.frame_id, msg.header.stamp = 'world', rospy.Time(0)
+                msg.pose.position.x, msg.pose.position.y = goal
+                msg.pose.orientation.w = 1.0
+                goal_pub.publish(msg)
             if m.header.stamp.to_sec() - start > limit_s:
                 break
             if mode.msg is not None and mode.msg.data in final:
                 break
-            if hold_after_x is not None and m.pose.pose.position.x > hold_after_x + PASSED_BY_M + 0.5:
+            if hold_after_x is not None and m.pose.pose.position.x > hold_after_x + passed_by + 0.5:
                 break
             rospy.sleep(0.2)
         seen = [msg.data for msg in mode.all]
@@ -49,8 +67,14 @@ class Avoid(unittest.TestCase):
             self.assertEqual(seen[-1], NavState.REACHED.name, 'not reached within %g s: modes %s, at (%.2f, %.2f)'
                              % (limit_s, seen, p.position.x, p.position.y))
             self.assertIn(NavState.AVOIDING.name, seen)
-            goal = rospy.get_param('/avoid_obstacles/goal_distance', 10.0)
-            self.assertLess(math.hypot(p.position.x - goal, p.position.y), 0.4)
+            radius = rospy.get_param('~goal_radius_m', GOAL_RADIUS_M)
+            self.assertLess(math.hypot(p.position.x - goal[0], p.position.y - goal[1]), radius,
+                            'REACHED by odometry at (%.2f, %.2f), goal (%.2f, %.2f)' % (p.position.x, p.position.y,
+                                                                                         goal[0], goal[1]))
+            if send_goal:
+                self.assertEqual(send_goal, 'sent', 'the navigator never published its goal')
+                g = followed.wait().pose.position
+                self.assertLess(math.hypot(g.x - goal[0], g.y - goal[1]), 0.05, 'the sent goal was not taken')
         elif expect == 'trapped':
             self.assertIn(seen[-1], (NavState.FAILED.name, NavState.RECOVERING.name), seen)
             self.assertIn(NavState.RECOVERING.name, seen)
@@ -58,8 +82,8 @@ class Avoid(unittest.TestCase):
                 harness.sim_sleep(1.0)
                 self.assertLess(abs(truth.wait().twist.twist.linear.x), AT_REST_MPS)
         if hold_after_x is not None:
-            past = [m for m in truth.all if m.pose.pose.position.x > hold_after_x + PASSED_BY_M]
-            self.assertTrue(past, 'never got %g m past x = %g' % (PASSED_BY_M, hold_after_x))
+            past = [m for m in truth.all if m.pose.pose.position.x > hold_after_x + passed_by]
+            self.assertTrue(past, 'never got %g m past x = %g' % (passed_by, hold_after_x))
             for m in past:
                 q = m.pose.pose.orientation
                 yaw = quaternion_yaw((q.x, q.y, q.z, q.w))

@@ -149,9 +149,21 @@ def test_reaching_the_goal_gives_zero_for_good():
     nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(1.0, 0.0))
     step = nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)
     assert step.state is NavState.GOAL_SEEKING and step.linear_x > 0
-    step = nav.update(5.0, (0.8, 0.0, 0.0), 0.3, 0.0, scan_of(), LASER, FOOTPRINT)
+    step = nav.update(5.0, (0.92, 0.0, 0.0), 0.3, 0.0, scan_of(), LASER, FOOTPRINT)
     assert step.state is NavState.REACHED and (step.linear_x, step.angular_z) == (0.0, 0.0)
     assert nav.update(6.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT).state is NavState.REACHED
+
+
+def test_the_last_metre_is_a_direct_approach_unless_it_is_unsafe():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(0.0, 0.6))
+    step = nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert step.reason.startswith('final approach') and step.linear_x == 0.0 and step.angular_z > 0
+    step = nav.update(0.1, (0.0, 0.0, math.pi / 2), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert step.reason.startswith('final approach') and step.linear_x > 0 and abs(step.angular_z) < 0.05
+    # A post between the robot and the goal: the window goes round it instead.
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(0.9, 0.0))
+    step = nav.update(0.0, (0.0, 0.0, 0.0), 0.3, 0.0, scan_of(circles=[(0.45, 0.0, 0.05)]), LASER, FOOTPRINT)
+    assert not step.reason.startswith('final approach') and step.plan is not None
 
 
 def test_an_obstacle_ahead_is_avoiding():

@@ -578,3 +578,17 @@ def test_static_obstacle_stays_put():
 def test_bad_time_is_rejected(t_s):
     with pytest.raises(ValueError, match='t_s'):
         moving_obstacle_xy(mover(True), t_s)
+
+
+def test_a_world_may_name_a_goal_outside_its_obstacles():
+    world = parse_world({'name': 'g', 'goal': {'x': 7.0, 'y': -1}, 'obstacles': []})
+    assert world.goal == (7.0, -1.0)
+    assert parse_world({'name': 'g'}).goal is None
+    assert load_world(os.path.join(WORLDS_DIR, 'obstacle_course.yaml')).goal == (7.0, 0.0)
+    box = {'name': 'b', 'type': 'box', 'position': [7.0, 0.0], 'size': [1, 1, 1]}
+    with pytest.raises(WorldError, match=r'goal: expected a point outside every obstacle, got .*inside b'):
+        parse_world({'name': 'g', 'goal': {'x': 7.2, 'y': 0.1}, 'obstacles': [box]})
+    with pytest.raises(WorldError, match=r'goal.y: expected a finite number \(m\)'):
+        parse_world({'name': 'g', 'goal': {'x': 1.0, 'y': 'ahead'}})
+    with pytest.raises(WorldError, match=r'goal.z: expected a known key'):
+        parse_world({'name': 'g', 'goal': {'x': 1.0, 'y': 0.0, 'z': 0.0}})
