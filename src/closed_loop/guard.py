@@ -91,7 +91,7 @@ def scan_problem(scan, age_s, scan_timeout_s):
     return input_problem(None if scan is None else nearest(scan), age_s, scan_timeout_s)
 
 
-def _clearances(points, footprint, poses):
+def footprint_clearances(points, footprint, poses):
     """Least distance (m) from the footprint at each of ``poses`` ((P, 3): x, y, yaw) to ``points`` (N, 2)."""
     if len(points) == 0:
         return numpy.full(len(poses), math.inf)
@@ -109,7 +109,7 @@ def footprint_clearance(points, footprint, x, y, yaw):
 
     0 for a point inside; ``inf`` when there are no points.
     """
-    return float(_clearances(points, footprint, [(x, y, yaw)])[0])
+    return float(footprint_clearances(points, footprint, [(x, y, yaw)])[0])
 
 
 def _toward(value, target, rate, dt):
@@ -151,7 +151,7 @@ def path_clearance(points, footprint, poses):
     reach = max(math.hypot(px, py) for px, py, _ in poses) + math.hypot(
         max(abs(footprint.x_min), abs(footprint.x_max)), max(abs(footprint.y_min), abs(footprint.y_max)))
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach + 1.0]
-    return float(numpy.min(_clearances(near, footprint, poses)))
+    return float(numpy.min(footprint_clearances(near, footprint, poses)))
 
 
 def is_safe(clearance_now, clearance_path, margin):

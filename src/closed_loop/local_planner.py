@@ -29,7 +29,7 @@ import cv2
 import numpy
 
 from closed_loop import wavefront
-from closed_loop.guard import footprint_clearance, path_clearance, scan_points
+from closed_loop.guard import footprint_clearance, footprint_clearances, path_clearance, scan_points
 
 #: Grid cell of the distance transform (m); clearances are read this much on the safe side.
 GRID_CELL_M = 0.04
@@ -51,7 +51,7 @@ AIM_ROOM_M = 0.05
 #: query's places in their cells) and half the outline's sample gap.
 FIELD_ERROR_M = GRID_CELL_M * math.sqrt(2.0) + 0.5 * OUTLINE_STEP_M
 #: At most this many candidates in doubt are checked exactly per decision (each costs about 0.1 ms).
-EXACT_CHECKS = 6
+EXACT_CHECKS = 4
 #: An aim more than this far (rad) to a side decides which way to turn in place.
 AIM_SIDE_RAD = 0.2
 #: Candidates per axis of the window.
@@ -205,6 +205,17 @@ def blind_points(points, scan, laser_pose):
     return points[off > half + scan.angle_increment]
 
 
+def keeps_margin(points, footprint, poses, margin):
+    """True if the footprint at every one of ``poses`` ((K, 3)) is at least ``margin`` from ``points``:
+    the exact check, over the points the swept rectangle could come that near to."""
+    if not len(points):
+        return True
+    radius = math.hypot(max(-footprint.x_min, footprint.x_max), max(-footprint.y_min, footprint.y_max))
+    reach = float(numpy.hypot(poses[:, 0], poses[:, 1]).max()) + radius + margin
+    near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach]
+    return not len(near) or float(footprint_clearances(near, footprint, poses).min()) >= margin
+
+
 def _confirm(score, safe, maybe, near, footprint, poses, margin):
     """The best-scoring candidate that is safe: one the grid left in doubt (``maybe``) is checked exactly
     against the points, best first, at most EXACT_CHECKS of them; ``safe`` and ``score`` are updated.
@@ -214,7 +225,7 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
         if score[best] == -numpy.inf or safe[best]:
             break
         maybe[best] = False
-        if path_clearance(near, footprint, poses[best]) >= margin:
+        if keeps_margin(near, footprint, poses[best], margin):
             safe[best] = True
         else:
             score[best] = -numpy.inf
@@ -223,7 +234,7 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
     return best if safe[best] else None
 
 
-def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0):
+def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0, scanned=None):
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
@@ -232,12 +243,12 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     ``remembered``: (M, 2) points of earlier scans in the robot's frame (``closed_loop.scan_memory``), used
     to choose the way around, and for safety only where the scanner cannot see now; ``turning``: +1 or -1 while the last decision was a
     turn in place that way (it goes on that way rather than swing back and forth between two ways
-    round), 0 otherwise.
+    round), 0 otherwise; ``scanned``: the scan's points in the robot's frame if already computed.
     """
     check_finite('v0, w0', v0, w0)
     check_finite('goal_xy', *goal_xy)
     s = settings
-    scanned = scan_points(scan, laser_pose)
+    scanned = scan_points(scan, laser_pose) if scanned is None else scanned
     # Where the scanner cannot see (behind a LIDAR of less than a full turn), what was seen there before
     # is the best knowledge there is: remembered points in that blind sector count for safety too, so a
     # turn does not swing the robot's back into something it saw a moment ago.
@@ -336,7 +347,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
             toward = 1.0 if left >= right else -1.0
         order = sorted(numpy.nonzero(turns)[0], key=lambda i: (numpy.sign(w[i]) != toward, -abs(w[i])))
         for i in order[:EXACT_CHECKS]:
-            if safe[i] or path_clearance(near, footprint, safe_poses[i]) >= s.safety_margin:
+            if safe[i] or keeps_margin(near, footprint, safe_poses[i], s.safety_margin):
                 safe[i] = candidates[i, 3] = True
                 best = int(i)
                 break

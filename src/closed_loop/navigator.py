@@ -146,6 +146,7 @@ class Navigator:
         self._memory = ScanMemory(settings.memory_time)
         self._turning = 0.0          # the way of the last turn in place, while it goes on
         self._remembered_scan = None
+        self._scanned = None         # its points in the robot's frame
         self.set_goal(goal_xy)
 
     def set_goal(self, goal_xy, now_s=None):
@@ -211,13 +212,14 @@ class Navigator:
             if step is not None:
                 return step
         if scan is not self._remembered_scan:
-            self._remembered_scan = scan
-            self._memory.add(now_s, pose, scan_points(scan, laser_pose), scan, laser_pose)
+            self._remembered_scan, self._scanned = scan, scan_points(scan, laser_pose)
+            self._memory.add(now_s, pose, self._scanned, scan, laser_pose)
         if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
             step = self._final_approach(now_s, goal_local, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
-        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning)
+        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
+                 self._scanned)
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
@@ -232,7 +234,7 @@ class Navigator:
         v = 0.0 if abs(bearing) > FINAL_DRIVE_RAD else min(s.max_speed, FINAL_SPEED_GAIN * distance) * math.cos(bearing)
         steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel + 1.0) / PREDICTION_STEP_S))
         poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
-        if path_clearance(scan_points(scan, laser_pose), footprint, poses) < s.safety_margin:
+        if path_clearance(self._scanned, footprint, poses) < s.safety_margin:
             return None
         period_s = 1.0 / s.rate_hz
         # One period's step from the measured speeds, within the limits (as the window's, local_planner).
