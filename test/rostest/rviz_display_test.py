@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """demo.launch rviz:=true in a real rviz on a virtual screen (Xvfb): once the robot has moved, a screenshot
 shows the scan points (magenta, rviz/closed_loop.rviz), the robot model (its URDF blue) and the red box itself
-(world_markers, in the world frame that TF joins to odom) in the 3D view and a camera image that is not blank (the red box, outside the 3D view); the launch log has no error.
+(world_markers, in the world frame that TF joins to odom) in the 3D view and a camera image that is not blank (the red box, outside the 3D view); the launch log has no error. avoid.launch rviz:=true: rviz
+subscribes to the navigator's ~plan and draws its aim.
 Skipped, with the reason, only where Xvfb cannot start."""
 import os
 import re
@@ -13,6 +14,7 @@ import unittest
 
 import cv2
 import numpy as np
+import rosgraph
 import rospy
 import rostest
 
@@ -47,12 +49,14 @@ def colour_mask(rgb, test):
 
 
 class RvizDisplay(unittest.TestCase):
-    def test_rviz_shows_robot_scan_and_camera(self):
-        rospy.init_node('rviz_display_test')
+    def _screenshot(self, name, command, moved_m=MOVED_M):
+        """(screenshot, launch log text, log path, topics rviz subscribed to) of ``command`` in rviz."""
+        if not rospy.core.is_initialized():
+            rospy.init_node('rviz_display_test')
         out_dir = harness.output_dir('rviz_display')
         for attempt in range(1, RVIZ_ATTEMPTS + 1):
-            log_path = os.path.join(out_dir, 'demo_rviz_%d.log' % attempt)
-            rgb = self._run_demo_and_screenshot(out_dir, log_path)
+            log_path = os.path.join(out_dir, '%s_%d.log' % (name, attempt))
+            rgb, topics = self._run_demo_and_screenshot(out_dir, log_path, command, name, moved_m)
             with open(log_path) as log:
                 text = log.read()
             if not RVIZ_DIED.search(text):
@@ -61,6 +65,24 @@ class RvizDisplay(unittest.TestCase):
             # bug: "free(): invalid next size"); say so and try once more rather than fail on it.
             rospy.logwarn('rviz died during start-up (attempt %d, %s)', attempt, log_path)
         self.assertFalse(RVIZ_DIED.search(text), 'rviz died in every attempt; see %s' % log_path)
+        return rgb, text, log_path, topics
+
+    def test_rviz_shows_the_navigators_plan(self):
+        # avoid.launch rviz:=true: the shipped config subscribes to the navigator's ~plan, and its aim (a
+        # purple sphere, a colour nothing else in the config uses) is drawn in the 3D view.
+        rgb, text, log_path, topics = self._screenshot(
+            'avoid_rviz', ['avoid.launch', 'world:=obstacle_left', 'camera:=false', 'rviz:=true'], moved_m=1.0)
+        self.assertIn('/avoid_obstacles/plan', topics)
+        box = view_box(rgb)
+        self.assertIsNotNone(box, 'no 3D view (background colour) on the screen')
+        x0, y0, x1, y1 = box
+        purple = colour_mask(rgb, lambda r, g, b: (b > 120) & (g < 0.5 * b) & (r > 0.45 * b) & (r < 0.8 * b))
+        self.assertGreater(int(purple[y0:y1, x0:x1].sum()), MIN_PIXELS, 'no aim of the plan in the 3D view')
+        bad = [line.strip() for line in text.splitlines() if BAD_LOG.search(line)]
+        self.assertEqual(bad, [], 'errors in the launch log (%s)' % log_path)
+
+    def test_rviz_shows_robot_scan_and_camera(self):
+        rgb, text, log_path, _ = self._screenshot('demo_rviz', ['demo.launch', 'world:=red_box', 'rviz:=true'])
 
         box = view_box(rgb)
         self.assertIsNotNone(box, 'no 3D view (background colour) on the screen')
@@ -79,7 +101,7 @@ class RvizDisplay(unittest.TestCase):
         bad = [line.strip() for line in text.splitlines() if BAD_LOG.search(line)]
         self.assertEqual(bad, [], 'errors in the demo log (%s)' % log_path)
 
-    def _run_demo_and_screenshot(self, out_dir, log_path):
+    def _run_demo_and_screenshot(self, out_dir, log_path, command, name, moved_m):
         try:
             screen = VirtualScreen().__enter__()
         except ScreenError as error:
@@ -88,16 +110,17 @@ class RvizDisplay(unittest.TestCase):
         try:
             env = dict(os.environ, DISPLAY=screen.display)
             with open(log_path, 'w') as log:
-                launch = subprocess.Popen(['roslaunch', 'closed_loop', 'demo.launch', 'world:=red_box',
-                                           'rviz:=true'], stdout=log, stderr=subprocess.STDOUT, env=env,
-                                          start_new_session=True)
+                launch = subprocess.Popen(['roslaunch', 'closed_loop'] + command, stdout=log,
+                                          stderr=subprocess.STDOUT, env=env, start_new_session=True)
                 truth = harness.GroundTruth()
-                truth.wait(timeout_s=60, predicate=lambda m: m.pose.pose.position.x > MOVED_M)
+                truth.wait(timeout_s=60, predicate=lambda m: m.pose.pose.position.x > moved_m)
                 time.sleep(RENDER_SETTLE_S)
                 rgb = screen.screenshot()
                 truth.sub.unregister()
-            cv2.imwrite(os.path.join(out_dir, 'rviz_screenshot.png'), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-            return rgb
+                _, subscribers, _ = rosgraph.Master('/rviz_display_test').getSystemState()
+                topics = [topic for topic, nodes in subscribers if '/rviz' in nodes]
+            cv2.imwrite(os.path.join(out_dir, name + '_screenshot.png'), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+            return rgb, topics
         finally:
             if launch is not None:
                 os.killpg(launch.pid, signal.SIGINT)

@@ -28,6 +28,7 @@ ODOM_FRAME = 'odom'
 PLAN_COLOURS = {'goal': (0.1, 0.85, 0.2, 1.0), 'avoid': (1.0, 0.75, 0.0, 1.0), 'turn': (1.0, 0.75, 0.0, 1.0),
                 'stop': (0.95, 0.1, 0.1, 1.0)}
 SAFE_COLOUR, UNSAFE_COLOUR = (0.3, 0.6, 1.0, 0.8), (0.95, 0.1, 0.1, 0.5)
+AIM_COLOUR = (0.6, 0.2, 0.9, 1.0)   # purple: no other display of the shipped rviz config uses it
 TF_WAIT_S = 0.5
 
 
@@ -291,8 +292,8 @@ class AvoidObstacles:
         aim.header = chosen.header
         aim.pose.position = Point(float(plan.aim_xy[0]), float(plan.aim_xy[1]), 0.05)
         aim.pose.orientation.w = 1.0
-        aim.scale.x = aim.scale.y = aim.scale.z = 0.12
-        aim.color = ColorRGBA(*PLAN_COLOURS['goal'])
+        aim.scale.x = aim.scale.y = aim.scale.z = 0.15
+        aim.color = ColorRGBA(*AIM_COLOUR)
         return MarkerArray(markers=[chosen, ends, aim])
 
 
