@@ -14,7 +14,7 @@ import numpy
 
 from closed_loop import robot_model
 from closed_loop.guard import footprint_clearance, path_clearance, scan_points
-from closed_loop.local_planner import PREDICTION_STEP_S, check_finite, plan, predict
+from closed_loop.local_planner import PREDICTION_STEP_S, check_finite, plan, predict, step_toward
 from closed_loop.scan import sample_angles
 from closed_loop.scan_memory import ScanMemory
 from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
@@ -145,6 +145,7 @@ class Navigator:
         self._side = 1.0
         self._memory = ScanMemory(settings.memory_time)
         self._turning = 0.0          # the way of the last turn in place, while it goes on
+        self._command = None         # the command of the last step, (m/s, rad/s)
         self._remembered_scan = None
         self._scanned = None         # its points in the robot's frame
         self.set_goal(goal_xy)
@@ -183,6 +184,11 @@ class Navigator:
 
     def update(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         """The :class:`Step` for now: ``pose`` (x, y, yaw) in odom, speeds (m/s, rad/s), the newest scan."""
+        step = self._decide(now_s, pose, v0, w0, scan, laser_pose, footprint)
+        self._command = (step.linear_x, step.angular_z)   # the next step is taken from it
+        return step
+
+    def _decide(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         check_finite('now_s', now_s)
         check_finite('pose', *pose)
         s = self.settings
@@ -219,7 +225,7 @@ class Navigator:
             if step is not None:
                 return step
         p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
-                 self._scanned)
+                 self._scanned, self._command)
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
@@ -237,10 +243,10 @@ class Navigator:
         if path_clearance(self._scanned, footprint, poses) < s.safety_margin:
             return None
         period_s = 1.0 / s.rate_hz
-        # One period's step from the measured speeds, within the limits (as the window's, local_planner).
-        v = max(-s.max_speed, min(s.max_speed, max(v0 - s.accel * period_s, min(v0 + s.accel * period_s, v))))
-        w = max(-s.max_yaw_rate, min(s.max_yaw_rate,
-                                     max(w0 - s.yaw_accel * period_s, min(w0 + s.yaw_accel * period_s, w))))
+        # One period's step toward (v, w), as the window's (local_planner.step_toward).
+        prev_v, prev_w = (None, None) if self._command is None else self._command
+        v = step_toward(v, prev_v, v0, s.accel, period_s, s.max_speed)
+        w = step_toward(w, prev_w, w0, s.yaw_accel, period_s, s.max_yaw_rate)
         why = 'final approach to the goal %.2f m away' % distance
         self._turning = 0.0
         self._enter(NavState.GOAL_SEEKING, now_s, why)

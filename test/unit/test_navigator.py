@@ -2,12 +2,13 @@
 import math
 import time
 
+import cv2
 import numpy
 import pytest
 
 from closed_loop import wavefront
 from closed_loop.guard import scan_points
-from closed_loop.local_planner import NavigatorError, edge_clearance, outline, plan, predict
+from closed_loop.local_planner import CHAMFER_ERROR, NavigatorError, edge_clearance, outline, plan, predict
 from closed_loop.navigator import NavigatorSettings
 from closed_loop.robot_model import Footprint, Pose2DInBase
 from closed_loop.scan import Scan
@@ -166,6 +167,17 @@ def test_the_last_metre_is_a_direct_approach_unless_it_is_unsafe():
     assert not step.reason.startswith('final approach') and step.plan is not None
 
 
+def test_a_base_that_overshoots_its_turn_is_not_sent_more_of_it():
+    # A skid-steer base measured at -1.8 rad/s after a command of -1.5, the goal ahead: the next command
+    # steps from what was sent toward straight, not from the overshoot (which kept it spinning in place).
+    s = NavigatorSettings()
+    p = plan(scan_of(), LASER, FOOTPRINT, 0.5, -1.8, (10.0, 0.0), s, previous=(0.5, -1.5))
+    assert p.angular_z == pytest.approx(-1.5 + s.yaw_accel / s.rate_hz)
+    # A base held at rest (a watchdog's zero) after a command of 0.5 m/s: a period's step from rest.
+    p = plan(scan_of(), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), s, previous=(0.5, 0.0))
+    assert p.linear_x == pytest.approx(s.accel / s.rate_hz)
+
+
 def test_an_obstacle_ahead_is_avoiding():
     nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
     step = nav.update(0.0, (0.0, 0.0, 0.0), 0.5, 0.0, scan_of(circles=[(1.2, 0.15, 0.3)]), LASER, FOOTPRINT)
@@ -254,3 +266,14 @@ def test_no_way_through_gives_no_aim_and_the_planner_falls_back_on_the_goal():
     assert wavefront.aim(scan_points(closed, LASER), (4.0, 0.0), 0.3, 1.5) is None
     p = run(closed, goal=(4.0, 0.0), v0=0.0)
     assert p.linear_x == 0.0 or p.clearance_m >= 0.1
+
+
+def test_the_chamfer_transform_never_overstates_by_more_than_its_allowance():
+    rng = numpy.random.default_rng(0)
+    for _ in range(20):
+        img = numpy.full((300, 300), 255, numpy.uint8)
+        pts = rng.integers(0, 300, (int(rng.integers(1, 60)), 2))
+        img[pts[:, 0], pts[:, 1]] = 0
+        chamfer = cv2.distanceTransform(img, cv2.DIST_L2, cv2.DIST_MASK_5)
+        exact = cv2.distanceTransform(img, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+        assert (chamfer * (1.0 - CHAMFER_ERROR) <= exact + 1e-6).all()
