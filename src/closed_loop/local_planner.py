@@ -118,7 +118,7 @@ class DistanceField:
             inside = (ij[:, 0] >= 0) & (ij[:, 0] < size) & (ij[:, 1] >= 0) & (ij[:, 1] < size)
             free[ij[inside, 1], ij[inside, 0]] = 0
         if free.all():
-            self._flat = None
+            self.flat = None
         else:
             # OpenCV's 5x5 chamfer mask is within CHAMFER_ERROR of the Euclidean distance either way, at
             # about half the cost of the exact transform: its reading is lowered by that much too.
@@ -126,15 +126,15 @@ class DistanceField:
                 - self.cell * math.sqrt(2.0)
             # The border reads as reach_m: a lookup beyond the square is clipped onto it.
             field[0, :] = field[-1, :] = field[:, 0] = field[:, -1] = reach_m
-            self._flat = field.ravel()
+            self.flat = field.ravel()
 
     def at_xy(self, x, y):
         """Clearance (m) at points (``x``, ``y``: arrays of one shape) in the robot's frame. The square is
         sized so that nothing the planner asks about lies beyond it; a point that did would read the
         border's value."""
-        if self._flat is None:
+        if self.flat is None:
             return numpy.full(numpy.shape(x), math.inf)
-        return self._flat.take(self.index(x, y), mode='clip')
+        return self.flat.take(self.index(x, y), mode='clip')
 
     def index(self, x, y):
         offset = self.half + 0.5
@@ -187,10 +187,16 @@ def edge_clearance(sampled, step_m):
 def clearances(field, shape, poses, step_m):
     """Clearance (m) of the footprint outline ``shape`` (M, 2, samples at most ``step_m`` apart) at each of
     ``poses`` (C, K, 3): (C, K)."""
+    if field.flat is None:
+        return numpy.full(poses.shape[:2], math.inf)
+    # In grid cells from the square's corner, so each of the C x K x M points costs the fewest operations.
+    k = numpy.float32(1.0 / field.cell)
     c, s = numpy.cos(poses[..., 2])[..., None], numpy.sin(poses[..., 2])[..., None]
-    px = poses[..., 0][..., None] + c * shape[:, 0] - s * shape[:, 1]
-    py = poses[..., 1][..., None] + s * shape[:, 0] + c * shape[:, 1]
-    return edge_clearance(field.at_xy(px, py).min(axis=2), step_m)
+    sx, sy = shape[:, 0] * k, shape[:, 1] * k
+    ix = (poses[..., 0] * k + (field.half + 0.5))[..., None] + c * sx - s * sy
+    iy = (poses[..., 1] * k + (field.half + 0.5))[..., None] + s * sx + c * sy
+    flat = iy.astype(numpy.intp) * field.size + ix.astype(numpy.intp)
+    return edge_clearance(field.flat.take(flat, mode='clip').min(axis=2), step_m)
 
 
 def check_finite(name, *values):
@@ -276,7 +282,8 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     points = numpy.concatenate((scanned, blind_points(remembered, scan, laser_pose))) \
         if remembered is not None and len(remembered) else scanned
     top_v, top_w = max(s.max_speed, abs(v0)), max(s.max_yaw_rate, abs(w0))
-    safe_steps = int(math.ceil((s.horizon + top_v / s.accel + top_w / s.yaw_accel) / PREDICTION_STEP_S)) + 1
+    # Followed for the horizon, then both speeds brake at once: at rest after the longer of the two.
+    safe_steps = int(math.ceil((s.horizon + max(top_v / s.accel, top_w / s.yaw_accel)) / PREDICTION_STEP_S)) + 1
     long_steps = int(math.ceil(s.lookahead / PREFERENCE_STEP_S))
     radius = math.hypot(max(abs(footprint.x_min), abs(footprint.x_max)),
                         max(abs(footprint.y_min), abs(footprint.y_max)))
