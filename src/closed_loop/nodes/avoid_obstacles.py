@@ -17,8 +17,8 @@ from closed_loop.geometry import quaternion_yaw
 from closed_loop.guard import path_clearance, scan_points
 from closed_loop.local_planner import PREDICTION_STEP_S, NavigatorError, predict
 from closed_loop.navigator import GoalSettings, Navigator, NavigatorSettings
-from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, frame_id, init_node, load_settings,
-                                      robot_geometry, stamp_to_sec)
+from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, StopsOnShutdown, frame_id, init_node,
+                                      load_settings, robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
 from closed_loop.scan import ScanError, validate_scan
 from closed_loop.sources import SourceCheck
@@ -32,7 +32,7 @@ AIM_COLOUR = (0.6, 0.2, 0.9, 1.0)   # purple: no other display of the shipped rv
 TF_WAIT_S = 0.5
 
 
-class AvoidObstacles:
+class AvoidObstacles(StopsOnShutdown):
     """Goes to a goal around obstacles, with the robot's footprint, or holds its start heading.
 
     The scan and odometry callbacks store; a timer on the ROS clock decides through
@@ -257,13 +257,6 @@ class AvoidObstacles:
             self._send(0.0, 0.0)
         rospy.logwarn_throttle(LOG_PERIOD_S, 'stopped: no scan received for %.2f s of wall time (scan_timeout '
                                '%.2f s)', silent_s, self.settings.scan_timeout)
-
-    def _on_shutdown(self):
-        self._watchdog.stop()
-        self._timer.shutdown()
-        with self.lock:
-            self._closing = True
-            self.cmd_pub.publish(twist(0.0, 0.0))
 
     # -- what rviz shows ------------------------------------------------------------------------------------
     def _plan_markers(self, plan):

@@ -10,14 +10,15 @@ from std_msgs.msg import String
 
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import LiveSettings, frame_id, init_node, load_settings, robot_geometry
+from closed_loop.nodes.common import (LiveSettings, StopsOnShutdown, frame_id, init_node, load_settings,
+                                      robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.scan import ScanError
 from closed_loop.sources import SourceCheck
 
 
 
-class CmdVelGuard:
+class CmdVelGuard(StopsOnShutdown):
     """Vetoes or slows any command whose predicted path brings the footprint within a margin of the scan.
 
     The footprint is the rectangle around the collision shapes of ``robot_description`` (the URDF on the
@@ -109,13 +110,6 @@ class CmdVelGuard:
             if not self._closing:
                 self._send(0.0, 0.0, Verdict.VETOED, 'no scan received for %.2f s of wall time '
                            '(scan_timeout %.2f s)' % (silent_s, self.settings.scan_timeout))
-
-    def _on_shutdown(self):
-        self._watchdog.stop()
-        self._timer.shutdown()
-        with self.lock:
-            self._closing = True
-            self.cmd_pub.publish(twist(0.0, 0.0))
 
     # -- the one decision path (lock held) ---------------------------------------------------------------
     def _decide(self, only_if_stricter):

@@ -6,6 +6,7 @@ import tempfile
 import rospkg
 import rospy
 from dynamic_reconfigure.server import Server as ReconfigureServer
+from geometry_msgs.msg import Twist
 
 from closed_loop import reconfigure, robot_model
 from closed_loop.settings import SettingsError, from_params
@@ -170,3 +171,16 @@ class LaserMounting:
                 rospy.logwarn('no robot_description: taking 0 rad as forward in frame %r', frame_id)
             self._cache[frame_id] = forward
         return self._cache[frame_id]
+
+
+class StopsOnShutdown:
+    """For a node that drives ``cmd_vel``: on shutdown, stop its silence watchdog (``_watchdog``) and
+    timer (``_timer``), refuse further commands (``_closing``, under ``lock``) and send zero on
+    ``cmd_pub``. Register it with ``rospy.on_shutdown(self._on_shutdown)``."""
+
+    def _on_shutdown(self):
+        self._watchdog.stop()
+        self._timer.shutdown()
+        with self.lock:
+            self._closing = True
+            self.cmd_pub.publish(Twist())   # all zero

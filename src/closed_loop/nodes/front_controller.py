@@ -7,16 +7,15 @@ from geometry_msgs.msg import Twist
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from closed_loop.commands import STOP
 from closed_loop.decisions import SilenceWatchdog
-from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, frame_id
-from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist_from_command
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, StopsOnShutdown, frame_id
+from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg
 from closed_loop.scan import ScanError, sector_min
 from closed_loop.sources import SourceCheck
 
 
 
-class FrontController:
+class FrontController(StopsOnShutdown):
     """Base of the controllers that drive on the nearest obstacle in the front sector.
 
     The ``scan`` callback stores the front reading (``closed_loop.scan.SectorReading``) with its header
@@ -156,10 +155,3 @@ class FrontController:
             if self._closing:
                 return
             self.on_silence(silent_s)
-
-    def _on_shutdown(self):
-        self._watchdog.stop()
-        self._timer.shutdown()
-        with self.lock:
-            self._closing = True
-            self.cmd_pub.publish(twist_from_command(STOP))
