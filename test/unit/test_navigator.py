@@ -7,8 +7,9 @@ import numpy
 import pytest
 
 from closed_loop import wavefront
+from closed_loop.clearance_field import CHAMFER_ERROR, edge_clearance, outline
 from closed_loop.guard import scan_points
-from closed_loop.local_planner import CHAMFER_ERROR, NavigatorError, edge_clearance, outline, plan, predict
+from closed_loop.local_planner import NavigatorError, plan, predict
 from closed_loop.navigator import NavigatorSettings
 from closed_loop.robot_model import Footprint, Pose2DInBase
 from closed_loop.scan import Scan
