@@ -47,6 +47,8 @@ AIM_ROOM_M = 0.05
 EXACT_CHECKS = 4
 #: An aim more than this far (rad) to a side decides which way to turn in place.
 AIM_SIDE_RAD = 0.2
+#: With a corridor (no goal), this near (m) to where its line is closed off, the robot stops: blocked.
+BLOCKED_STOP_M = 0.3
 #: Candidates per axis of the window.
 LINEAR_SAMPLES = 5
 ANGULAR_SAMPLES = 15
@@ -145,7 +147,7 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
 
 
 def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0, scanned=None,
-         previous=None):
+         previous=None, corridor=None):
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
@@ -155,7 +157,8 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     to choose the way around, and for safety only where the scanner cannot see now; ``turning``: +1 or -1 while the last decision was a
     turn in place that way (it goes on that way rather than swing back and forth between two ways
     round), 0 otherwise; ``scanned``: the scan's points in the robot's frame if already computed;
-    ``previous``: the command sent last (m/s, rad/s), which the step is taken from.
+    ``previous``: the command sent last (m/s, rad/s), which the step is taken from; ``corridor``: where
+    the way round may go (``closed_loop.wavefront.aim``'s), None for anywhere.
     """
     check_finite('v0, w0', v0, w0)
     check_finite('goal_xy', *goal_xy)
@@ -209,9 +212,18 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     # shows (closed_loop.wavefront), or the goal itself when it shows none.
     half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
     seen = scanned if remembered is None or not len(remembered) else numpy.concatenate((scanned, remembered))
-    aim_xy = wavefront.aim(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
-                           0.5 * (footprint.y_max - footprint.y_min))
-    aim_xy = aim_xy or goal_xy
+    way = wavefront.way(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
+                        0.5 * (footprint.y_max - footprint.y_min), corridor)
+    aim_xy = goal_xy if way is None else way.aim
+    if corridor is not None and way is not None and way.goal != tuple(goal_xy):
+        # The line is closed off within the corridor: go up to where, steering for the far point (which keeps
+        # the heading; a near one would turn a small offset from the line into a large angle), and stop.
+        if math.hypot(*way.goal) <= BLOCKED_STOP_M:
+            why = ('the way along the start heading is closed off %.2f m ahead (no way round within '
+                   'hold_corridor): stopped before it' % math.hypot(*way.goal))
+            return Plan(0.0, 0.0, 'stop', why, now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+        if way.aim == way.goal:
+            aim_xy = goal_xy
     if not (safe | maybe).any():
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
                     '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),

@@ -46,8 +46,12 @@ class NavigatorSettings:
     memory_time: float = param(10.0, 's', 'scan points are remembered this long (in odom) to choose the way '
                                'around (and, where the LIDAR cannot see, for safety); 0: no memory', minimum=0.0,
                                maximum=120.0, live=True)
-    hold_lookahead: float = param(3.0, 'm', 'with no goal: aim this far ahead along the start heading',
+    hold_lookahead: float = param(3.0, 'm', 'with no goal: aim this far ahead of the robot along the start '
+                                  'heading',
                                   minimum=0.5, live=True)
+    hold_corridor: float = param(2.0, 'm', 'with no goal: the way round an obstacle keeps within this distance '
+                                 'of the line ahead along the start heading (a wall across it blocks the way, '
+                                 'to be stopped at, not gone round)', minimum=0.0, exclusive_minimum=True, live=True)
     stuck_timeout: float = param(6.0, 's', 'RECOVERING after this long without getting closer to the goal',
                                  minimum=0.5, live=True)
     give_up_timeout: float = param(60.0, 's', 'FAILED after this long without getting closer to the goal',
@@ -98,16 +102,16 @@ class NavState(enum.Enum):
 
 #: Getting this much closer to the goal (m) counts as progress.
 PROGRESS_M = 0.1
-#: Recovery: back up at this speed for this long (if the rear is clear), then turn in place at this rate
-#: for this long toward the side not tried last time (if turning is safe).
 #: Within this distance of the goal (m), a direct approach (turn toward it at FINAL_TURN_GAIN x bearing, at
-#: most FINAL_TURN_RADPS,
-#: drive once within FINAL_DRIVE_RAD of it at FINAL_SPEED_GAIN x distance) replaces the window, if safe.
+#: most FINAL_TURN_RADPS, drive once within FINAL_DRIVE_RAD of it at FINAL_SPEED_GAIN x distance) replaces
+#: the window, if safe.
 FINAL_APPROACH_M = 1.0
 FINAL_TURN_GAIN = 1.5
 FINAL_TURN_RADPS = 1.0
 FINAL_SPEED_GAIN = 1.0
 FINAL_DRIVE_RAD = 0.5
+#: Recovery: back up at this speed for this long (if the rear is clear), then turn in place at this rate
+#: for this long toward the side not tried last time (if turning is safe).
 BACKUP_SPEED_MPS = 0.15
 BACKUP_S = 1.0
 RECOVERY_TURN_RADPS = 0.8
@@ -130,8 +134,11 @@ class Navigator:
     with injected time, the pose in odom and the newest scan.
 
     With a goal (odom, m) it heads there and is REACHED within ``goal_tolerance`` (then zero). Without one it
-    holds the heading it started with: it aims ``hold_lookahead`` ahead of its projection on the start line,
-    so after an obstacle it returns to that line and heading, and it never reaches anything. No progress
+    holds the heading it started with (the lesson's "resume the original direction"): it aims
+    ``hold_lookahead`` ahead of itself along the start heading, so after an obstacle it turns back to that
+    heading (on a line beside the first one), and it never reaches anything; the way round keeps within
+    ``hold_corridor`` of that line, so a wall across the whole way is a block it stops at, not a thing to
+    go round. No progress
     toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (back up if the rear is clear, turn
     in place toward the other side than last time if that is safe, then seek again); none for
     ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
@@ -175,12 +182,20 @@ class Navigator:
         else:
             sx, sy, syaw = self._start
             along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
-            ahead = along + self.settings.hold_lookahead
-            gx, gy = sx + ahead * math.cos(syaw), sy + ahead * math.sin(syaw)
+            gx = x + self.settings.hold_lookahead * math.cos(syaw)
+            gy = y + self.settings.hold_lookahead * math.sin(syaw)
             progress = along
         dx, dy = gx - x, gy - y
         c, s = math.cos(yaw), math.sin(yaw)
         return (c * dx + s * dy, -s * dx + c * dy), progress
+
+    def corridor(self, pose):
+        """With no goal, the line along the start heading through the robot and ``hold_corridor``, in the
+        robot's frame (for :func:`closed_loop.wavefront.way`); None with a goal."""
+        if self.goal is not None:
+            return None
+        relative = self._start[2] - pose[2]
+        return (0.0, 0.0), (math.cos(relative), math.sin(relative)), self.settings.hold_corridor
 
     def update(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         """The :class:`Step` for now: ``pose`` (x, y, yaw) in odom, speeds (m/s, rad/s), the newest scan."""
@@ -225,7 +240,7 @@ class Navigator:
             if step is not None:
                 return step
         p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
-                 self._scanned, self._command)
+                 self._scanned, self._command, self.corridor(pose))
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)

@@ -15,9 +15,15 @@ the map):
 - from the robot (or the passable cell nearest to it, within ``START_SEARCH_M``) down the wave, up to
   ``aim_m``, as far as the way stays in a straight line of sight of the robot through passable cells.
 
+A ``corridor`` (a line through the goal, and a half-width) closes every cell farther from the line than
+that, and where the goal cannot be reached within it, the goal moves back along the line to the farthest
+point that can: the navigator with no goal goes round what stands on its line, and up to a wall across the
+whole way, not round it.
+
 No way through (the scan shows the goal closed off) leaves the goal as the aim; the state machine above
 handles a robot that gets nowhere. Free of ROS.
 """
+import collections
 import math
 
 import cv2
@@ -32,6 +38,10 @@ _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 _SQUARE = numpy.ones((3, 3), numpy.uint8)
 _NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
 
+#: What :func:`way` found: the point to steer for, and the goal the way leads to (the goal given, or the
+#: point a corridor's line is closed off at), both (x, y) in the robot's frame.
+Way = collections.namedtuple('Way', 'aim goal')
+
 
 def _box(goal_xy):
     """(x0, y0, columns, rows) of the grid around the robot (the origin) and the goal, capped."""
@@ -45,14 +55,23 @@ def _box(goal_xy):
     return x0, y0, int(math.ceil((x1 - x0) / CELL_M)), int(math.ceil((y1 - y0) / CELL_M)), (gx, gy)
 
 
-def aim(points, goal_xy, half_width_m, aim_m, sight_m=None):
-    """The point (x, y) in the robot's frame to steer for, or None when the points show no way to the goal.
+def aim(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
+    """The point (x, y) in the robot's frame to steer for, or None when the points show no way to the goal
+    (:func:`way`'s ``aim``)."""
+    found = way(points, goal_xy, half_width_m, aim_m, sight_m, corridor)
+    return None if found is None else found.aim
+
+
+def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
+    """The :class:`Way` to the goal, or None when the points show none.
 
     ``points``: (N, 2) obstacle points in the robot's frame (the scan's, and those remembered of recent
     scans); ``goal_xy``: the goal there; ``half_width_m``: how far a passable cell must be from every
     point (the robot's half-width plus the margin); ``sight_m``: the room a straight line to the aim must
     keep (default ``half_width_m``; the robot's half-width alone lets the aim round a corner the way
-    itself keeps the margin from)."""
+    itself keeps the margin from); ``corridor``: ((x, y) a point of a line through the goal, (dx, dy) its
+    unit direction, half-width m), all in the robot's frame: the way stays within the half-width of that
+    line, to the goal or, if it is closed off, to the farthest point of the line before it that is not."""
     x0, y0, cols, rows, (gx, gy) = _box(goal_xy)
     # The room at each cell's centre, read from a distance transform FINE times finer (accurate to a fine
     # cell's half-diagonal, where the coarse grid alone would be off by up to 0.14 m).
@@ -66,10 +85,26 @@ def aim(points, goal_xy, half_width_m, aim_m, sight_m=None):
     # A 5x5 mask is within 2% of the exact distance, at a third of the cost; the aim is guidance, not safety.
     room = cv2.distanceTransform(occupied, cv2.DIST_L2, cv2.DIST_MASK_5)[FINE // 2::FINE, FINE // 2::FINE]
     passable = room * fine >= half_width_m
+    if corridor is not None:
+        (px, py), (dx, dy), half = corridor
+        xs = x0 + (numpy.arange(cols) + 0.5) * CELL_M - px
+        ys = y0 + (numpy.arange(rows) + 0.5) * CELL_M - py
+        passable &= numpy.abs(dx * ys[:, None] - dy * xs[None, :]) <= half
     in_sight = passable if sight_m is None else room * fine >= sight_m
     goal_cell = (int((gy - y0) / CELL_M), int((gx - x0) / CELL_M))
     start = _nearest_passable(passable, (int(-y0 / CELL_M), int(-x0 / CELL_M)))
-    if start is None or not passable[goal_cell]:
+    if start is None:
+        return None
+    if corridor is not None:
+        cell, point = _farthest_on_line(passable, start, corridor, (x0, y0), (gx, gy))
+        if cell is None:
+            return None
+        if cell != goal_cell:
+            goal_cell, (gx, gy) = cell, point
+            goal_xy = (gx, gy)
+            if _in_sight(in_sight, start, cell):
+                return Way(goal_xy, goal_xy)     # straight up to where the line is closed off
+    if not passable[goal_cell]:
         return None
     # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter; ``count`` adds one
     # per round to every cell reached, so a cell reached in round m (the goal in round 0) ends with
@@ -118,9 +153,28 @@ def aim(points, goal_xy, half_width_m, aim_m, sight_m=None):
         if not _in_sight(in_sight, start, (i, j)):
             break
         aim_cell = (i, j)
+    goal = goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
     if steps[aim_cell] == 0:
-        return goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
-    return x0 + (aim_cell[1] + 0.5) * CELL_M, y0 + (aim_cell[0] + 0.5) * CELL_M
+        return Way(tuple(goal), tuple(goal))
+    return Way((x0 + (aim_cell[1] + 0.5) * CELL_M, y0 + (aim_cell[0] + 0.5) * CELL_M), tuple(goal))
+
+
+def _farthest_on_line(passable, start, corridor, origin, goal_xy):
+    """The cell and the point (x, y) of the goal, or of the farthest point before it on the corridor's line
+    (from the robot's projection on it) that passable cells connect to ``start``; (None, None) if none
+    does."""
+    (px, py), (dx, dy), _ = corridor
+    x0, y0 = origin
+    rows, cols = passable.shape
+    _, labels = cv2.connectedComponents(passable.astype(numpy.uint8), connectivity=8)
+    region = labels[start]
+    along = (goal_xy[0] - px) * dx + (goal_xy[1] - py) * dy
+    nearest = -(px * dx + py * dy)        # the robot's projection on the line
+    for t in numpy.arange(along, min(nearest, along) - 1e-9, -0.5 * CELL_M):
+        i, j = int((py + t * dy - y0) / CELL_M), int((px + t * dx - x0) / CELL_M)
+        if 0 <= i < rows and 0 <= j < cols and passable[i, j] and labels[i, j] == region:
+            return (i, j), (float(px + t * dx), float(py + t * dy))
+    return None, None
 
 
 def _in_sight(passable, a, b):

@@ -4,8 +4,8 @@ within ~goal_radius_m of the goal, no contact), 'trapped' (ends RECOVERING or FA
 contact) or 'hold'; ~goal_x, ~goal_y (world frame, m): the goal expected (default ~goal_distance ahead of the
 origin); ~send_goal: send that goal on move_base_simple/goal (frame world, as rviz's "2D Nav Goal" does)
 once the robot is under way, and expect it followed; ~hold_after_x (m, optional): with no goal, once the
-robot is ~passed_by_m (3 m) past this x its heading is within 10 degrees of the start heading; ~limit_s:
-simulated seconds allowed."""
+robot is ~passed_by_m (3 m) past this x its heading is within 10 degrees of the start heading, judged over
+the next ~hold_window_m (0.5 m) of travel; ~limit_s: simulated seconds allowed."""
 import math
 import os
 import sys
@@ -23,8 +23,14 @@ from closed_loop.navigator import NavState  # noqa: E402
 
 HOLD_TOLERANCE_RAD = math.radians(10.0)
 PASSED_BY_M = 3.0
+HOLD_WINDOW_M = 0.5
 GOAL_RADIUS_M = 0.4
 AT_REST_MPS = 0.01
+
+
+def _yaw(odometry):
+    q = odometry.pose.pose.orientation
+    return quaternion_yaw((q.x, q.y, q.z, q.w))
 
 
 class Avoid(unittest.TestCase):
@@ -34,6 +40,7 @@ class Avoid(unittest.TestCase):
         limit_s = rospy.get_param('~limit_s', 60.0)
         hold_after_x = rospy.get_param('~hold_after_x', None)
         passed_by = rospy.get_param('~passed_by_m', PASSED_BY_M)
+        window = rospy.get_param('~hold_window_m', HOLD_WINDOW_M)
         goal = (rospy.get_param('~goal_x', rospy.get_param('/avoid_obstacles/goal_distance', 10.0)),
                 rospy.get_param('~goal_y', 0.0))
         send_goal = rospy.get_param('~send_goal', False)
@@ -57,7 +64,7 @@ class Avoid(unittest.TestCase):
                 break
             if mode.msg is not None and mode.msg.data in final:
                 break
-            if hold_after_x is not None and m.pose.pose.position.x > hold_after_x + passed_by + 0.5:
+            if hold_after_x is not None and m.pose.pose.position.x > hold_after_x + passed_by + window:
                 break
             rospy.sleep(0.2)
         seen = [msg.data for msg in mode.all]
@@ -82,13 +89,17 @@ class Avoid(unittest.TestCase):
                 harness.sim_sleep(1.0)
                 self.assertLess(abs(truth.wait().twist.twist.linear.x), AT_REST_MPS)
         if hold_after_x is not None:
-            past = [m for m in truth.all if m.pose.pose.position.x > hold_after_x + passed_by]
-            self.assertTrue(past, 'never got %g m past x = %g' % (passed_by, hold_after_x))
-            for m in past:
-                q = m.pose.pose.orientation
-                yaw = quaternion_yaw((q.x, q.y, q.z, q.w))
-                self.assertLess(abs(yaw), HOLD_TOLERANCE_RAD, 'heading %.1f deg at x = %.2f m'
-                                % (math.degrees(yaw), m.pose.pose.position.x))
+            begin, end = hold_after_x + passed_by, hold_after_x + passed_by + window
+            xs = [m.pose.pose.position.x for m in truth.all]
+            self.assertTrue(any(x > end for x in xs), 'never got %g m past x = %g: at x = %.2f m, modes %s'
+                            % (passed_by + window, hold_after_x, p.position.x, seen))
+            last = next(i for i, x in enumerate(xs) if x > end)
+            track = [(m.pose.pose.position.x, m.pose.pose.position.y, _yaw(m)) for m in truth.all[:last + 1]]
+            where = ' '.join('(%.2f, %.2f, %.0f deg)' % (x, y, math.degrees(a)) for x, y, a in track[::10])
+            for x, y, yaw in track:
+                if x > begin:
+                    self.assertLess(abs(yaw), HOLD_TOLERANCE_RAD, 'heading %.1f deg at x = %.2f m; track: %s'
+                                    % (math.degrees(yaw), x, where))
             self.assertNotIn(NavState.REACHED.name, seen)
 
 

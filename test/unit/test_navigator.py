@@ -205,13 +205,45 @@ def test_no_progress_recovers_then_fails():
     assert transitions[-1][0] is NavState.FAILED and transitions[-1][1] == pytest.approx(10.0, abs=0.11)
 
 
-def test_without_a_goal_it_aims_back_at_the_start_line():
+def test_without_a_goal_it_turns_back_to_the_start_heading():
     nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0))
-    # Pushed 1 m to the left of its start line and pointing along it: it steers right, back to the line.
-    step = nav.update(0.0, (2.0, 1.0, 0.0), 0.5, 0.0, scan_of(), LASER, FOOTPRINT)
+    # Pushed 1 m to the left of its start line and turned 0.5 rad left: it steers right, back to the heading,
+    # for a point 3 m ahead of itself along it (not back to the start line).
+    step = nav.update(0.0, (2.0, 1.0, 0.5), 0.5, 0.0, scan_of(), LASER, FOOTPRINT)
     assert step.angular_z < 0 and step.state is not NavState.REACHED
     goal_local, progress = nav.target((2.0, 1.0, 0.0))
-    assert goal_local == pytest.approx((3.0, -1.0)) and progress == pytest.approx(2.0)
+    assert goal_local == pytest.approx((3.0, 0.0)) and progress == pytest.approx(2.0)
+    (px, py), (dx, dy), half = nav.corridor((2.0, 1.0, 0.5))
+    assert (px, py) == (0.0, 0.0) and math.atan2(dy, dx) == pytest.approx(-0.5) and half == 2.0
+    assert Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(5.0, 0.0)).corridor((0.0, 0.0, 0.0)) is None
+
+
+CORRIDOR = ((0.0, 0.0), (1.0, 0.0), 2.0)
+
+
+@pytest.mark.parametrize('half_length, closed', [(1.4, False), (2.5, True)])
+def test_within_a_corridor_the_way_goes_round_a_block_but_not_round_a_wall(half_length, closed):
+    # A wall 1.5 m ahead across the line, the goal 3 m ahead on it; the way round its end needs the robot's
+    # half-width plus margins (0.3 m) beyond it: inside the 2 m corridor for a 1.4 m half-length, not for 2.5 m.
+    wall = scan_points(scan_of(segments=[((1.5, -half_length), (1.5, half_length))]), LASER)
+    assert wavefront.way(wall, (3.0, 0.0), 0.3, 1.5).goal == (3.0, 0.0)     # no corridor: round anything
+    way = wavefront.way(wall, (3.0, 0.0), 0.3, 1.5, corridor=CORRIDOR)
+    if closed:
+        # The goal moves back along the line to the last point before the wall with room for the robot.
+        assert way.goal[1] == 0.0 and 1.5 - 0.3 - 0.2 <= way.goal[0] <= 1.5 - 0.3
+        assert way.aim == way.goal
+    else:
+        assert way.goal == (3.0, 0.0) and abs(way.aim[1]) > 0.5      # round one end
+
+
+def test_without_a_goal_it_stops_before_a_wall_across_the_way_and_does_not_go_round_it():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0))
+    wall = scan_of(segments=[((2.0, -4.0), (2.0, 4.0))])
+    far = nav.update(0.0, (0.0, 0.0, 0.0), 0.5, 0.0, wall, LASER, FOOTPRINT)
+    assert far.linear_x > 0 and abs(far.plan.aim_xy[1]) < 1e-6      # on toward it, straight
+    near = scan_of(segments=[((0.55, -4.0), (0.55, 4.0))])
+    step = nav.update(0.1, (0.0, 0.0, 0.0), 0.1, 0.0, near, LASER, FOOTPRINT)
+    assert (step.linear_x, step.angular_z) == (0.0, 0.0) and 'closed off' in step.reason
 
 
 def test_a_new_goal_starts_over():
