@@ -185,7 +185,9 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     # Candidates are targets over the whole speed range; each is predicted with the ramp from (v0, w0) at
     # the accelerations, and what is sent is the first period's step of that ramp (the dynamic window).
     vs = numpy.linspace(0.0, s.max_speed, LINEAR_SAMPLES)
-    ws = numpy.linspace(-s.max_yaw_rate, s.max_yaw_rate, ANGULAR_SAMPLES)
+    # Turn rates closer together near zero (u|u| over -1..1), where a small heading error is corrected.
+    u = numpy.linspace(-1.0, 1.0, ANGULAR_SAMPLES)
+    ws = s.max_yaw_rate * u * numpy.abs(u)
     v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
     safe_poses = predict(v0, w0, v, w, s, s.horizon, safe_steps)
     clear = clearances(field, shape, safe_poses, OUTLINE_STEP_M).min(axis=1)

@@ -13,7 +13,9 @@ the map):
 - a breadth-first wave from the goal over passable cells, alternating 4- and 8-neighbour steps, which
   gives the octagonal distance (within 8% of the Euclidean), stopped once it has covered the robot;
 - from the robot (or the passable cell nearest to it, within ``START_SEARCH_M``) down the wave, up to
-  ``aim_m``, as far as the way stays in a straight line of sight of the robot through passable cells.
+  ``aim_m``, as far as the way stays in a straight line of sight of the robot through passable cells;
+  where the straight line to the goal is passable all the way, that line is the way (no wave), and the
+  aim is on it exactly. The grid is placed with the robot at a cell's centre.
 
 A ``corridor`` (a line through the goal, and a half-width) closes every cell farther from the line than
 that, and where the goal cannot be reached within it, the goal moves back along the line to the farthest
@@ -52,6 +54,8 @@ def _box(goal_xy):
         gx, gy = gx * reach / distance, gy * reach / distance
     x0, x1 = min(0.0, gx) - BOX_MARGIN_M, max(0.0, gx) + BOX_MARGIN_M
     y0, y1 = min(0.0, gy) - BOX_MARGIN_M, max(0.0, gy) + BOX_MARGIN_M
+    # Moved out to where the robot is at a cell's centre, so the way starts where the robot is.
+    x0, y0 = -CELL_M * (math.ceil(-x0 / CELL_M) + 0.5), -CELL_M * (math.ceil(-y0 / CELL_M) + 0.5)
     return x0, y0, int(math.ceil((x1 - x0) / CELL_M)), int(math.ceil((y1 - y0) / CELL_M)), (gx, gy)
 
 
@@ -92,7 +96,8 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
         passable &= numpy.abs(dx * ys[:, None] - dy * xs[None, :]) <= half
     in_sight = passable if sight_m is None else room * fine >= sight_m
     goal_cell = (int((gy - y0) / CELL_M), int((gx - x0) / CELL_M))
-    start = _nearest_passable(passable, (int(-y0 / CELL_M), int(-x0 / CELL_M)))
+    here = (int(-y0 / CELL_M), int(-x0 / CELL_M))
+    start = _nearest_passable(passable, here)
     if start is None:
         return None
     if corridor is not None:
@@ -106,6 +111,11 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
                 return Way(goal_xy, goal_xy)     # straight up to where the line is closed off
     if not passable[goal_cell]:
         return None
+    goal = goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
+    if start == here and _in_sight(passable, start, goal_cell):
+        # The straight line is the way: the aim is on it, exactly (not at a cell's centre).
+        scale = min(1.0, aim_m / max(math.hypot(*goal), 1e-9))
+        return Way((goal[0] * scale, goal[1] * scale), tuple(goal))
     # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter; ``count`` adds one
     # per round to every cell reached, so a cell reached in round m (the goal in round 0) ends with
     # rounds + 1 - m, from which its step count is read back.
@@ -153,7 +163,6 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
         if not _in_sight(in_sight, start, (i, j)):
             break
         aim_cell = (i, j)
-    goal = goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
     if steps[aim_cell] == 0:
         return Way(tuple(goal), tuple(goal))
     return Way((x0 + (aim_cell[1] + 0.5) * CELL_M, y0 + (aim_cell[0] + 0.5) * CELL_M), tuple(goal))
