@@ -4,9 +4,12 @@ An obstacle is a vertical prism: a box (walls are boxes) or a cylinder. :data:`S
 obstacle's ``shape`` to a class that gives, for one obstacle at its time-0 position, the signed distance
 from a point to its footprint, whether a robot's rectangle overlaps it, and its pybullet collision and
 visual shapes. World checks, the demo's clearance report and the simulator all go through this table, so
-a new shape is one class here.
+a new shape is one class here. Each also casts planar rays at a group of its obstacles
+(``ray_distances``), for the LIDAR's planar ray caster (``closed_loop.planar_rays``).
 """
 import math
+
+import numpy
 
 
 def _corners(cx, cy, yaw, x_min, x_max, y_min, y_max):
@@ -51,6 +54,31 @@ class Box:
         return not separated(robot_corners(pose, rect), box)
 
     @staticmethod
+    def ray_params(obstacles):
+        """What :meth:`ray_distances` needs of each box, (M, 5): cos and sin of its yaw, its half-sizes, and
+        the radius of the circle round its footprint."""
+        return numpy.array([(math.cos(o.yaw), math.sin(o.yaw), 0.5 * o.size[0], 0.5 * o.size[1],
+                             0.5 * math.hypot(o.size[0], o.size[1])) for o in obstacles]).reshape(-1, 5)
+
+    @staticmethod
+    def ray_distances(params, centres, origin, dirs):
+        """(N, M) distance from ``origin`` (x, y) along each of ``dirs`` ((N, 2), unit) to each of M boxes
+        (``params`` rows of :meth:`ray_params`, centres ``centres`` (M, 2)); inf where the ray misses (or
+        starts inside)."""
+        c, s, half = params[:, 0], params[:, 1], params[:, 2:4]
+        rel = numpy.asarray(origin) - centres
+        ox, oy = c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]        # (M,) in each box
+        dx = dirs[:, :1] * c + dirs[:, 1:] * s                                        # (N, M)
+        dy = -dirs[:, :1] * s + dirs[:, 1:] * c
+        with numpy.errstate(divide='ignore', invalid='ignore'):
+            inv_x, inv_y = 1.0 / dx, 1.0 / dy
+            ax, bx = (-half[:, 0] - ox) * inv_x, (half[:, 0] - ox) * inv_x
+            ay, by = (-half[:, 1] - oy) * inv_y, (half[:, 1] - oy) * inv_y
+            near = numpy.maximum(numpy.fmin(ax, bx), numpy.fmin(ay, by))
+            far = numpy.minimum(numpy.fmax(ax, bx), numpy.fmax(ay, by))
+        return numpy.where((near <= far) & (near >= 0.0), near, numpy.inf)
+
+    @staticmethod
     def pybullet_shapes(obstacle, call, pybullet):
         half = [0.5 * s for s in obstacle.size]
         return (call(pybullet.createCollisionShape, pybullet.GEOM_BOX, halfExtents=half),
@@ -73,6 +101,21 @@ class Cylinder:
         lx, ly = c * dx + s * dy, -s * dx + c * dy
         gap = math.hypot(max(x_min - lx, 0.0, lx - x_max), max(y_min - ly, 0.0, ly - y_max))
         return gap < obstacle.radius
+
+    @staticmethod
+    def ray_params(obstacles):
+        """(M, 1): each cylinder's radius (also that of the circle round its footprint, the last column)."""
+        return numpy.array([(o.radius,) for o in obstacles]).reshape(-1, 1)
+
+    @staticmethod
+    def ray_distances(params, centres, origin, dirs):
+        """As :meth:`Box.ray_distances`, for cylinders."""
+        radius = params[:, 0]
+        rel = centres - numpy.asarray(origin)                      # (M, 2) from the origin
+        b = dirs @ rel.T                                            # (N, M) along each ray to the closest point
+        disc = b * b - ((rel * rel).sum(axis=1) - radius * radius)
+        t = b - numpy.sqrt(numpy.maximum(disc, 0.0))
+        return numpy.where((disc >= 0.0) & (t >= 0.0), t, numpy.inf)
 
     @staticmethod
     def pybullet_shapes(obstacle, call, pybullet):
