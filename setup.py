@@ -3,6 +3,6 @@ from catkin_pkg.python_setup import generate_distutils_setup
 from setuptools import setup
 
 setup(**generate_distutils_setup(
-    packages=['closed_loop', 'closed_loop.nodes', 'closed_loop.sensors'],
+    packages=['closed_loop', 'closed_loop.controllers', 'closed_loop.nodes', 'closed_loop.sensors'],
     package_dir={'': 'src'},
 ))

@@ -1,132 +1,264 @@
-"""Navigation episodes in one process: the simulator core and the navigator's core stepped in lockstep, no
-ROS, for benchmarks and batches of scenarios.
+"""Episodes in one process: the simulator's core and a controller's core (``closed_loop.controllers``)
+stepped in lockstep, deterministic, free of ROS; for benchmarks and batches of scenarios
+(``closed_loop.sweep``).
 
-The loop does what the graph does, on simulated time: physics at ``physics_rate_hz``; a LIDAR scan every
-``scan_rate_hz`` period; the navigator at its ``rate_hz`` on the newest scan and the odometry (pose and
-twist in ``odom``, from the wheels), as ``avoid_obstacles`` does; its command reaches the wheels
-``COMMAND_DELAY_S`` later (one physics step: the time a message takes on loopback is under a millisecond,
-and the node's own timer phase is already in the loop, since it acts on the newest scan at its own rate).
+An :class:`EpisodeSpec` names everything an episode depends on: the world (a shipped name, a file, or
+``{'generator': ClutterSettings fields}``), the robot profile, the controller and its settings (checked by
+the settings class its node uses), the LIDAR's noise and seed, the goal, the time limit. :func:`run_episode`
+gives an :class:`EpisodeResult`; the same spec gives the same result and trajectory, bit for bit, in any
+process (nothing in it reads a clock, and the noise has its own seeded generator).
+
+Timing, as the graph has it, on simulated time: physics at ``physics_rate_hz``; a LIDAR scan every period,
+handed to the controller at its stamp (in the graph it arrives a few milliseconds of wall time later,
+within the physics step); the controller's timer at its ``rate_hz``, ``timer_phase_s`` after each scan
+(in the graph the phase is wherever the node's start put it); a command, from the timer or at once from
+a scan (new danger), reaches the wheels ``command_delay_s`` later. That delay is one physics step: the
+reaction benchmark (``bench_loop``) measures scan-to-zero-command delivery of a few milliseconds at real
+time, and the simulator applies a command at its next physics step. The camera is off (no controller
+here uses it). The LIDAR is cast with the planar caster (``closed_loop.planar_rays``): exact, and many
+times cheaper in clutter.
+
 Everything judged comes from ground truth: contacts every physics step, the least clearance between the
-robot's collision shapes and any obstacle at the navigator's rate, the final distance to the goal.
-Free of ROS.
+robot's collision shapes and any obstacle at the controller's rate, the path, the deceleration.
 """
 import dataclasses
 import math
 import time
+from typing import Optional
 
+from closed_loop import clutter
 from closed_loop.commands import validate_command
+from closed_loop.controllers import Context, ControllerError, Odom, controller_class
 from closed_loop.geometry import quaternion_yaw
-from closed_loop.navigator import NavigatorSettings, NavState, Navigator
+from closed_loop.profiles import PACKAGE_ROOT, load_profile
 from closed_loop.rig import Rig
 from closed_loop.scan import Scan
 from closed_loop.sensors.lidar import Lidar
-from closed_loop.settings import check
+from closed_loop.settings import SettingsError, check
+from closed_loop.world import load_world, parse_world, resolve_world
 
-#: The goal counts as reached when ground truth ends this close to it (m), with no contact.
+#: A goal counts as reached when ground truth ends this close to it (m), with no contact.
 SUCCESS_RADIUS_M = 0.4
-COMMAND_DELAY_S = 0.01
 #: Clearance to obstacles is looked for up to this far (m); beyond, it reads as this.
 CLEARANCE_LOOKOUT_M = 2.0
+#: At rest: ground-truth speeds under these (m/s, rad/s), under a zero command, for REST_HOLD_S.
+REST_MPS, REST_RADPS, REST_HOLD_S = 1e-3, 1e-3, 1.0
+OUTCOMES = ('reached', 'stopped', 'failed', 'timed_out', 'collided', 'error')
+
+
+class EpisodeError(ValueError):
+    """An unusable episode spec; the message names the field and what was expected."""
+
+
+@dataclasses.dataclass(frozen=True)
+class EpisodeSpec:
+    """Everything one episode depends on. ``world``: a world name, a world file, or ``{'generator': {...}}``
+    (``closed_loop.clutter.ClutterSettings`` fields); ``robot``: a profile name; ``controller``: a
+    controller name; ``settings``: its ``~parameters`` over the profile's; ``sim``: the simulator's and its
+    sensors' over the profile's; ``scan_noise``: the LIDAR's noise (m, std) and ``seed`` its seed;
+    ``goal``: (x, y) in the world frame for a controller that takes one (default: the world's ``goal:``,
+    else its own default); ``time_limit_s``: simulated seconds; ``keep_trajectory``: keep a row per tick."""
+    world: object = 'wall'
+    robot: str = 'closed_loop'
+    controller: str = 'stop_on_obstacle'
+    settings: dict = dataclasses.field(default_factory=dict)
+    sim: dict = dataclasses.field(default_factory=dict)
+    scan_noise: float = 0.0
+    seed: int = 0
+    goal: Optional[tuple] = None
+    time_limit_s: float = 30.0
+    keep_trajectory: bool = False
+    command_delay_s: float = 0.01
+    timer_phase_s: float = 0.0
+
+    def to_dict(self):
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_dict(cls, data, where='episode'):
+        """A spec from plain values (a sweep row, a YAML mapping); unknown or ill-typed fields are refused."""
+        if not isinstance(data, dict):
+            raise EpisodeError('%s: expected a mapping of episode fields, got %r' % (where, data))
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - names)
+        if unknown:
+            raise EpisodeError('%s.%s: not an episode field (expected one of %s)'
+                               % (where, unknown[0], ', '.join(sorted(names))))
+        values = dict(data)
+        if isinstance(values.get('goal'), list):
+            values['goal'] = tuple(values['goal'])
+        return cls(**values)
 
 
 @dataclasses.dataclass
-class NavResult:
-    """What one navigation episode did. ``outcome``: 'reached' (the navigator said REACHED and ground truth
-    is within SUCCESS_RADIUS_M of the goal, with no contact), 'collided' (any contact), 'failed' (FAILED,
-    or REACHED by odometry but not by ground truth), 'timed_out'."""
+class EpisodeResult:
+    """What one episode did. ``outcome``: 'reached' (the controller said REACHED and ground truth is within
+    SUCCESS_RADIUS_M of the goal), 'stopped' (at rest under a zero command for REST_HOLD_S), 'failed'
+    (FAILED, or REACHED by odometry only), 'timed_out', 'collided' (any contact; it wins over the others),
+    or 'error' (the episode raised: ``error`` says what). ``time_s``: when it came to rest, reached, or
+    ended. ``final_pose``: ground truth (x, y, yaw) in the world frame. ``trajectory`` (on request): per
+    tick (t, x, y, yaw, speed, command v, command w, mode)."""
     outcome: str
-    state: str
-    time_s: float
-    contacts: int
-    min_clearance_m: float
-    goal_error_m: float
-    path_m: float
-    final_pose: tuple
-    decision_ms: list
-    wall_s: float
-    #: With ``keep_trajectory``: (t s, truth x, y, yaw, odom x, y, yaw, state, command v, w) per decision.
-    trajectory: list = None
+    mode: Optional[str] = None
+    time_s: float = 0.0
+    contacts: int = 0
+    min_clearance_m: float = math.inf
+    final_pose: tuple = (math.nan, math.nan, math.nan)
+    goal_error_m: Optional[float] = None
+    path_m: float = 0.0
+    peak_decel_mps2: float = 0.0
+    wall_s: float = 0.0
+    decision_ms: list = dataclasses.field(default_factory=list)
+    trajectory: Optional[list] = None
+    error: Optional[str] = None
 
 
-def _transform_into_odom(start, x, y):
+def load_episode_world(spec_world, profile):
+    """The :class:`closed_loop.world.World` a spec's ``world`` names."""
+    if isinstance(spec_world, dict):
+        if set(spec_world) != {'generator'} or not isinstance(spec_world['generator'], dict):
+            raise EpisodeError("world: expected a world name, a file, or {'generator': {...}}, got %r"
+                               % (spec_world,))
+        try:
+            settings = clutter.ClutterSettings(**dict({'profile': profile.name}, **spec_world['generator']))
+        except TypeError as error:
+            raise EpisodeError('world.generator: %s' % error)
+        try:
+            raw = clutter.generate(settings.check(), load_profile(settings.profile))
+        except clutter.ClutterError as error:
+            raise EpisodeError('world.generator.%s' % error)
+        return parse_world(raw, raw['name'], footprint=profile.footprint)
+    return load_world(resolve_world(spec_world, '%s/worlds' % PACKAGE_ROOT), footprint=profile.footprint)
+
+
+def controller_settings(cls, values):
+    """The controller's settings classes built from ``values`` ({name: value}), each checked as its node
+    checks it; a name no class has is refused."""
+    classes = (cls.settings_class,) + tuple(cls.extra_settings_classes)
+    known = {f.name: c for c in classes for f in dataclasses.fields(c)}
+    unknown = sorted(set(values) - set(known))
+    if unknown:
+        raise EpisodeError('settings.%s: not a parameter of %s' % (unknown[0], cls.name))
+    built = []
+    for c in classes:
+        try:
+            built.append(check(c(**{k: v for k, v in values.items() if known[k] is c})))
+        except SettingsError as error:
+            raise EpisodeError('settings: %s' % error)
+    return built
+
+
+def _to_odom(start, x, y):
     """A world point in the odom frame, which starts at the robot's start pose."""
     dx, dy = x - start.x, y - start.y
     c, s = math.cos(start.yaw), math.sin(start.yaw)
     return c * dx + s * dy, -s * dx + c * dy
 
 
-def run_navigation(world, profile, goal_xy, time_limit_s=80.0, nav_overrides=None, sim_overrides=None,
-                   keep_trajectory=False):
-    """Run ``avoid_obstacles``' core in ``world`` (a :class:`closed_loop.world.World`) with robot
-    ``profile`` (:class:`closed_loop.profiles.Profile`) toward ``goal_xy`` (world frame, m) for at most
-    ``time_limit_s`` simulated seconds; the profile's parameters apply, then the overrides. The camera is
-    off (the navigator does not use it). Returns a :class:`NavResult`."""
-    sim_params = dict(profile.node_params('sim'), camera=False, **(sim_overrides or {}))
-    nav_params = dict(profile.node_params('avoid_obstacles'), **(nav_overrides or {}))
-    settings = check(NavigatorSettings(**nav_params))
-    footprint = profile.footprint
-    laser_pose = profile.laser_pose(settings.scan_frame)
-    rig = Rig(world, sim_params, profile.urdf)
+def run_episode(spec):
+    """Run ``spec`` (an :class:`EpisodeSpec`); an unusable spec raises :class:`EpisodeError`."""
     started = time.monotonic()
     try:
-        sim = rig.sim
-        lidar = rig.sensors[Lidar]
-        layout, ls = lidar.layout, lidar.settings
-        start = world.robot_start
-        goal_odom = _transform_into_odom(start, *goal_xy)
-        navigator = Navigator(settings, (0.0, 0.0, 0.0), goal_odom)
-        steps_per_scan = max(1, int(round(lidar.period_s / sim.dt_s)))
-        steps_per_control = max(1, int(round(1.0 / settings.rate_hz / sim.dt_s)))
-        delay_steps = max(1, int(round(COMMAND_DELAY_S / sim.dt_s)))
-        total_steps = int(round(time_limit_s / sim.dt_s))
-        scan, pending, contacts, clearance, path_m, decision_ms = None, [], 0, math.inf, 0.0, []
-        touching = set()
-        last_xy = (start.x, start.y)
-        state = navigator.state
-        trajectory = [] if keep_trajectory else None
-        for k in range(total_steps):
-            if k % steps_per_scan == 0:
-                scan = Scan(sim.time_s, lidar.frame, layout.angle_min, layout.angle_max,
-                            layout.angle_increment, 0.0, lidar.period_s, ls.range_min, ls.range_max,
-                            lidar.sample(sim))
-            if k % steps_per_control == 0:
-                odo = sim.odometry
-                t0 = time.perf_counter()
-                step = navigator.update(sim.time_s, (odo.x, odo.y, odo.yaw), odo.twist.linear_x,
-                                        odo.twist.angular_z, scan, laser_pose, footprint)
-                if step.plan is not None:
-                    decision_ms.append((time.perf_counter() - t0) * 1e3)
-                pending.append((k + delay_steps, validate_command(step.linear_x, step.angular_z)))
-                state = step.state
-                pose, _ = sim.ground_truth()
-                clearance = min(clearance, sim.clearance(CLEARANCE_LOOKOUT_M))
-                path_m += math.hypot(pose.position[0] - last_xy[0], pose.position[1] - last_xy[1])
-                last_xy = pose.position[:2]
-                if trajectory is not None:
-                    trajectory.append((sim.time_s, pose.position[0], pose.position[1],
-                                       quaternion_yaw(pose.orientation), odo.x, odo.y, odo.yaw, state.name,
-                                       step.linear_x, step.angular_z))
-                if state in (NavState.REACHED, NavState.FAILED) and abs(odo.twist.linear_x) < 1e-3 \
-                        and abs(odo.twist.angular_z) < 1e-3:
-                    break
-            while pending and pending[0][0] <= k:
-                sim.command(pending.pop(0)[1])
-            sim.step()
-            now_touching = sim.contacts_with_obstacles()
-            contacts += len(now_touching - touching)    # a contact counts once, when it begins
-            touching = now_touching
-        pose, _ = sim.ground_truth()
-        x, y, yaw = pose.position[0], pose.position[1], quaternion_yaw(pose.orientation)
-        error = math.hypot(goal_xy[0] - x, goal_xy[1] - y)
-        if contacts:
-            outcome = 'collided'
-        elif state is NavState.REACHED:
-            outcome = 'reached' if error <= SUCCESS_RADIUS_M else 'failed'
-        elif state is NavState.FAILED:
-            outcome = 'failed'
-        else:
-            outcome = 'timed_out'
-        return NavResult(outcome, state.name, sim.time_s, contacts, clearance, error, path_m, (x, y, yaw),
-                         decision_ms, time.monotonic() - started, trajectory)
+        profile = load_profile(spec.robot)
+    except ValueError as error:
+        raise EpisodeError('robot: %s' % error)
+    try:
+        cls = controller_class(spec.controller)
+    except ControllerError as error:
+        raise EpisodeError(str(error))
+    world = load_episode_world(spec.world, profile)
+    settings, *extra = controller_settings(cls, dict(profile.node_params(cls.name), **spec.settings))
+    sim_params = dict(profile.node_params('sim'), camera=False, ray_caster='planar',
+                      scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed, **spec.sim)
+    start = world.robot_start
+    goal_world = tuple(spec.goal) if spec.goal is not None else world.goal
+    goal = _to_odom(start, *goal_world) if goal_world is not None else None
+    if goal is None and extra and getattr(extra[0], 'goal_distance', 0.0) > 0.0:
+        d = extra[0].goal_distance
+        goal = (d, 0.0)
+        goal_world = (start.x + d * math.cos(start.yaw), start.y + d * math.sin(start.yaw))
+    laser_pose = profile.laser_pose(settings.scan_frame)
+    try:
+        rig = Rig(world, sim_params, profile.urdf)
+    except SettingsError as error:
+        raise EpisodeError('sim: %s' % error)
+    try:
+        controller = cls(settings, Context(laser_pose, profile.footprint, (0.0, 0.0, 0.0), goal))
+        result = _loop(spec, rig, controller, goal_world)
     finally:
         rig.close()
+    result.decision_ms = getattr(controller, 'decision_ms', [])
+    result.wall_s = time.monotonic() - started
+    return result
+
+
+def _loop(spec, rig, controller, goal_world):
+    sim = rig.sim
+    lidar = rig.sensors[Lidar]
+    layout, ls = lidar.layout, lidar.settings
+    dt = sim.dt_s
+    steps_per_scan = max(1, int(round(lidar.period_s / dt)))
+    steps_per_tick = max(1, int(round(1.0 / controller.settings.rate_hz / dt)))
+    phase = int(round(spec.timer_phase_s / dt)) % steps_per_tick
+    delay = max(1, int(round(spec.command_delay_s / dt)))
+    pending = []                      # (step, command), in order
+    contacts, touching, clearance, path_m, peak_decel = 0, set(), math.inf, 0.0, 0.0
+    pose, _ = sim.ground_truth()
+    last_xy, last_speed, last_t = pose.position[:2], 0.0, 0.0
+    trajectory = [] if spec.keep_trajectory else None
+    command, rest_since, ended_s = (0.0, 0.0), None, None
+    for k in range(int(round(spec.time_limit_s / dt)) + 1):
+        now = sim.time_s
+        odo = sim.odometry
+        odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
+        sent = None
+        if k % steps_per_scan == 0:
+            scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
+                        lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
+            sent = controller.on_scan(now, scan, odom)
+        if k % steps_per_tick == phase:
+            sent = controller.on_tick(now, odom)
+            pose, (linear, angular) = sim.ground_truth()
+            x, y = pose.position[:2]
+            yaw = quaternion_yaw(pose.orientation)
+            speed = linear[0] * math.cos(yaw) + linear[1] * math.sin(yaw)       # forward, signed
+            clearance = min(clearance, sim.clearance(CLEARANCE_LOOKOUT_M))
+            path_m += math.hypot(x - last_xy[0], y - last_xy[1])
+            if now > last_t:
+                peak_decel = max(peak_decel, (abs(last_speed) - abs(speed)) / (now - last_t))
+            last_xy, last_speed, last_t = (x, y), speed, now
+            if trajectory is not None:
+                trajectory.append((now, x, y, yaw, speed, command[0], command[1], controller.mode))
+            at_rest = abs(speed) < REST_MPS and abs(angular[2]) < REST_RADPS and command == (0.0, 0.0)
+            rest_since = (rest_since if rest_since is not None else now) if at_rest else None
+            if controller.finished and at_rest:
+                ended_s = now
+                break
+            if rest_since is not None and controller.ends_at_rest and now - rest_since >= REST_HOLD_S:
+                ended_s = rest_since
+                break
+        if sent is not None:
+            pending.append((k + delay, validate_command(*sent)))
+        while pending and pending[0][0] <= k:
+            _, cmd = pending.pop(0)
+            command = (cmd.linear_x, cmd.angular_z)
+            sim.command(cmd)
+        sim.step()
+        now_touching = sim.contacts_with_obstacles()
+        contacts += len(now_touching - touching)      # a contact counts once, when it begins
+        touching = now_touching
+    pose, _ = sim.ground_truth()
+    final = (pose.position[0], pose.position[1], quaternion_yaw(pose.orientation))
+    error = None if goal_world is None else math.hypot(goal_world[0] - final[0], goal_world[1] - final[1])
+    if contacts:
+        outcome = 'collided'
+    elif controller.mode == 'REACHED':
+        outcome = 'reached' if error is not None and error <= SUCCESS_RADIUS_M else 'failed'
+    elif controller.mode == 'FAILED':
+        outcome = 'failed'
+    elif ended_s is not None:
+        outcome = 'stopped'
+    else:
+        outcome = 'timed_out'
+    return EpisodeResult(outcome, controller.mode, ended_s if ended_s is not None else sim.time_s, contacts,
+                         clearance, final, error, path_m, peak_decel, trajectory=trajectory)

@@ -91,6 +91,29 @@ def rear_seen(scan, laser_pose):
     return covered.sum() * spacing >= 2 * REAR_HALF_ANGLE_RAD - 2 * spacing
 
 
+def in_danger(sent, scan_points_xy, settings, footprint):
+    """True if the command being followed (``sent``, m/s and rad/s) is no longer safe: its predicted path
+    comes within ``safety_margin`` of the scan's points (robot frame). The node acts at once on such a
+    scan rather than at its next tick."""
+    v, w = sent
+    if v == 0.0 and w == 0.0:
+        return False
+    s = settings
+    steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
+    poses = predict(v, w, [v], [w], s, s.horizon, steps)
+    return path_clearance(scan_points_xy, footprint, poses[0]) < s.safety_margin
+
+
+def stale_input(now_s, scan_stamp_s, odom_stamp_s, scan_timeout_s):
+    """Why the newest scan or odometry cannot be acted on (older, or stamped later, than
+    ``scan_timeout_s``), or None."""
+    for name, stamp in (('scan', scan_stamp_s), ('odometry', odom_stamp_s)):
+        age = now_s - stamp
+        if age > scan_timeout_s or age < -scan_timeout_s:
+            return '%s is %.2f s old (scan_timeout %.2f s)' % (name, age, scan_timeout_s)
+    return None
+
+
 class NavState(enum.Enum):
     """What the navigator is doing (its ``~mode``)."""
     GOAL_SEEKING = 'GOAL_SEEKING'

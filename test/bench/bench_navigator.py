@@ -6,8 +6,9 @@ Options: ``--seeds N`` per fill ratio (default 10), ``--robot NAME`` (default ja
 
 Worlds: ``closed_loop.clutter`` with fill ratios 0.2, 0.4, 0.6, 0.8 and 1.0 and seeds 0 .. N-1 (its default
 geometry: sites 1.1 m apart, narrowest gaps 1.3 robot widths, a corridor the robot fits at any heading).
-Each episode is ``closed_loop.episode.run_navigation``: the simulator core and the navigator's core in
-lockstep in this process, the profile's parameters (720 rays over 270 degrees at 10 Hz, 0.8 m/s), the
+Each episode is ``closed_loop.episode.run_episode``: the simulator core and the navigator's core in
+lockstep in this process, as the node drives it (on its timer, and at once on a scan that makes the command
+being followed unsafe), the profile's parameters (720 rays over 270 degrees at 10 Hz, 0.8 m/s), the
 navigator's defaults otherwise. Success: the navigator said REACHED and ground truth ends within 0.4 m of
 the goal, with no contact. Decision cost: the wall time of each planning decision (``Navigator.update`` when
 it plans), on this process's one core, twice: in the episode loop, between pybullet's physics steps,
@@ -30,9 +31,8 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop.clutter import ClutterSettings, generate, narrowest_gap, robot_extent  # noqa: E402
 from closed_loop import navigator as navigator_module  # noqa: E402
-from closed_loop.episode import run_navigation  # noqa: E402
+from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.profiles import load_profile  # noqa: E402
-from closed_loop.world import parse_world  # noqa: E402
 
 FILL_RATIOS = (0.2, 0.4, 0.6, 0.8, 1.0)
 TIME_LIMIT_S = 80.0
@@ -92,14 +92,15 @@ def main():
         for seed in range(args.seeds):
             settings = ClutterSettings(seed=seed, fill_ratio=fill, profile=profile.name)
             raw = generate(settings, profile)
-            world = parse_world(raw, raw['name'], footprint=profile.footprint)
-            result = run_navigation(world, profile, (settings.length, 0.0), TIME_LIMIT_S)
+            result = run_episode(EpisodeSpec(world={'generator': {'seed': seed, 'fill_ratio': fill}},
+                                             robot=profile.name, controller='avoid_obstacles',
+                                             goal=(settings.length, 0.0), time_limit_s=TIME_LIMIT_S))
             decisions.extend(result.decision_ms)
             obstacles = len(raw['obstacles']) - 2
             rows[fill].append((result, obstacles, narrowest_gap(raw)))
             if args.verbose:
                 print('  %-28s %-9s %-12s %5.1f s  contacts %d  clearance %.3f m  goal error %.2f m  path %.1f m'
-                      % (raw['name'], result.outcome, result.state, result.time_s, result.contacts,
+                      % (raw['name'], result.outcome, result.mode, result.time_s, result.contacts,
                          result.min_clearance_m, result.goal_error_m, result.path_m), flush=True)
     print('%s, %d worlds, goal %.0f m ahead, %.0f s limit (%.0f s wall)'
           % (profile.name, sum(len(r) for r in rows.values()), ClutterSettings().length, TIME_LIMIT_S,

@@ -7,7 +7,7 @@ import yaml
 
 from closed_loop.clutter import (ClutterError, ClutterSettings, check_path, generate, main, narrowest_gap,
                                  robot_extent)
-from closed_loop.episode import run_navigation
+from closed_loop.episode import EpisodeSpec, run_episode
 from closed_loop.profiles import ProfileError, available_profiles, load_profile
 from closed_loop.world import load_world, parse_world
 
@@ -81,10 +81,8 @@ def test_a_missing_output_directory_is_refused(tmp_path):
 
 
 def test_a_navigation_episode_reaches_the_goal_without_contact():
-    profile = load_profile('closed_loop')
-    world = load_world(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds', 'obstacle_left.yaml'),
-                       footprint=profile.footprint)
-    result = run_navigation(world, profile, (6.0, 0.0), time_limit_s=40.0, keep_trajectory=True)
+    result = run_episode(EpisodeSpec(world='obstacle_left', controller='avoid_obstacles', goal=(6.0, 0.0),
+                                     time_limit_s=40.0, keep_trajectory=True))
     assert result.outcome == 'reached', result
     assert result.contacts == 0 and result.min_clearance_m > 0.05
     assert result.goal_error_m <= 0.4 and result.time_s < 40.0

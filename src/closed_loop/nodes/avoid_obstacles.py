@@ -14,9 +14,9 @@ from visualization_msgs.msg import Marker, MarkerArray
 from closed_loop import robot_model
 from closed_loop.decisions import SilenceWatchdog
 from closed_loop.geometry import quaternion_yaw
-from closed_loop.guard import path_clearance, scan_points
-from closed_loop.local_planner import PREDICTION_STEP_S, NavigatorError, predict
-from closed_loop.navigator import GoalSettings, Navigator, NavigatorSettings
+from closed_loop.guard import scan_points
+from closed_loop.local_planner import NavigatorError
+from closed_loop.navigator import GoalSettings, Navigator, NavigatorSettings, in_danger, stale_input
 from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, StopsOnShutdown, frame_id, init_node,
                                       load_settings, robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
@@ -130,13 +130,7 @@ class AvoidObstacles(StopsOnShutdown):
 
     def _in_danger(self, scan):
         """True if the command being followed is no longer safe on ``scan`` (lock held)."""
-        v, w = self.sent
-        if v == 0.0 and w == 0.0:
-            return False
-        s = self.settings
-        steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
-        poses = predict(v, w, [v], [w], s, s.horizon, steps)
-        return path_clearance(scan_points(scan, self.laser_pose), self.footprint, poses[0]) < s.safety_margin
+        return in_danger(self.sent, scan_points(scan, self.laser_pose), self.settings, self.footprint)
 
     def _on_odom(self, msg):
         p = msg.pose.pose
@@ -231,11 +225,7 @@ class AvoidObstacles(StopsOnShutdown):
             return 'no odometry yet'
         if self.scan is None:
             return 'no usable scan'
-        for name, stamp in (('scan', self.scan.stamp_s), ('odometry', self.odom[5])):
-            age = now - stamp
-            if age > s.scan_timeout or age < -s.scan_timeout:
-                return '%s is %.2f s old (scan_timeout %.2f s)' % (name, age, s.scan_timeout)
-        return None
+        return stale_input(now, self.scan.stamp_s, self.odom[5], s.scan_timeout)
 
     def _send(self, v, w):
         self.cmd_pub.publish(twist(v, w))
