@@ -10,8 +10,8 @@ process (nothing in it reads a clock, and the noise has its own seeded generator
 
 Timing, as the graph has it, on simulated time: physics at ``physics_rate_hz``; a LIDAR scan every period,
 handed to the controller at its stamp (in the graph it arrives a few milliseconds of wall time later,
-within the physics step); the controller's timer at its ``rate_hz``, ``timer_phase_s`` after each scan
-(in the graph the phase is wherever the node's start put it); a command, from the timer or at once from
+within the physics step); the controller's timer at its ``rate_hz``, ``timer_phase_s`` (default 0.05 s,
+half a LIDAR period: the mean of a phase the node's start-up puts anywhere) after each scan; a command, from the timer or at once from
 a scan (new danger), reaches the wheels ``command_delay_s`` later. That delay is one physics step: the
 reaction benchmark (``bench_loop``) measures scan-to-zero-command delivery of a few milliseconds at real
 time, and the simulator applies a command at its next physics step. The camera is off (no controller
@@ -69,7 +69,7 @@ class EpisodeSpec:
     time_limit_s: float = 30.0
     keep_trajectory: bool = False
     command_delay_s: float = 0.01
-    timer_phase_s: float = 0.0
+    timer_phase_s: float = 0.05
 
     def to_dict(self):
         return dataclasses.asdict(self)
@@ -155,36 +155,80 @@ def _to_odom(start, x, y):
     return c * dx + s * dy, -s * dx + c * dy
 
 
-def run_episode(spec):
-    """Run ``spec`` (an :class:`EpisodeSpec`); an unusable spec raises :class:`EpisodeError`."""
-    started = time.monotonic()
+@dataclasses.dataclass
+class Prepared:
+    """What :func:`prepare` makes of a spec, everything but the simulation."""
+    profile: object
+    controller_class: type
+    world: object
+    settings: object
+    sim_params: dict
+    goal_odom: Optional[tuple]
+    goal_world: Optional[tuple]
+
+
+def prepare(spec, cache=None):
+    """Check ``spec`` and resolve it (profile, controller, world, settings, goal) without simulating;
+    raise :class:`EpisodeError` naming the field that is wrong. ``cache``: a dict kept between calls, so
+    many specs over a few worlds and robots load each once."""
+    cache = {} if cache is None else cache
+    key = ('robot', spec.robot)
     try:
-        profile = load_profile(spec.robot)
-    except ValueError as error:
+        if key not in cache:
+            cache[key] = load_profile(spec.robot)
+    except (TypeError, ValueError) as error:
         raise EpisodeError('robot: %s' % error)
+    profile = cache[key]
     try:
         cls = controller_class(spec.controller)
     except ControllerError as error:
         raise EpisodeError(str(error))
-    world = load_episode_world(spec.world, profile)
+    key = ('world', repr(spec.world), spec.robot)
+    try:
+        if key not in cache:
+            cache[key] = load_episode_world(spec.world, profile)
+    except EpisodeError:
+        raise
+    except (TypeError, ValueError) as error:
+        raise EpisodeError('world: %s' % error)
+    world = cache[key]
+    if not isinstance(spec.settings, dict) or not isinstance(spec.sim, dict):
+        raise EpisodeError('settings, sim: expected mappings of ~parameters')
     settings, *extra = controller_settings(cls, dict(profile.node_params(cls.name), **spec.settings))
     sim_params = dict(profile.node_params('sim'), camera=False, ray_caster='planar',
                       scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed, **spec.sim)
+    try:
+        Rig.check_params(sim_params)
+    except SettingsError as error:
+        raise EpisodeError('sim: %s' % error)
+    for name, low in (('time_limit_s', 0.0), ('command_delay_s', 0.0), ('timer_phase_s', 0.0)):
+        value = getattr(spec, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                or value < low:
+            raise EpisodeError('%s: expected a number of s, at least %g, got %r' % (name, low, value))
     start = world.robot_start
     goal_world = tuple(spec.goal) if spec.goal is not None else world.goal
+    if goal_world is not None and (len(goal_world) != 2 or not all(
+            isinstance(v, (int, float)) and math.isfinite(v) for v in goal_world)):
+        raise EpisodeError('goal: expected [x, y] in m, got %r' % (spec.goal,))
     goal = _to_odom(start, *goal_world) if goal_world is not None else None
     if goal is None and extra and getattr(extra[0], 'goal_distance', 0.0) > 0.0:
         d = extra[0].goal_distance
         goal = (d, 0.0)
         goal_world = (start.x + d * math.cos(start.yaw), start.y + d * math.sin(start.yaw))
-    laser_pose = profile.laser_pose(settings.scan_frame)
+    return Prepared(profile, cls, world, settings, sim_params, goal, goal_world)
+
+
+def run_episode(spec, cache=None):
+    """Run ``spec`` (an :class:`EpisodeSpec`); an unusable spec raises :class:`EpisodeError`."""
+    started = time.monotonic()
+    p = prepare(spec, cache)
+    laser_pose = p.profile.laser_pose(p.settings.scan_frame)
+    rig = Rig(p.world, p.sim_params, p.profile.urdf)
     try:
-        rig = Rig(world, sim_params, profile.urdf)
-    except SettingsError as error:
-        raise EpisodeError('sim: %s' % error)
-    try:
-        controller = cls(settings, Context(laser_pose, profile.footprint, (0.0, 0.0, 0.0), goal))
-        result = _loop(spec, rig, controller, goal_world)
+        controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, (0.0, 0.0, 0.0),
+                                                            p.goal_odom))
+        result = _loop(spec, rig, controller, p.goal_world)
     finally:
         rig.close()
     result.decision_ms = getattr(controller, 'decision_ms', [])

@@ -16,6 +16,18 @@ class Rig:
     """
 
     def __init__(self, world, params=None, urdf=None):
+        self.settings, sensor_settings = self.check_params(params)
+        self.sim = Simulation(world, self.settings, urdf)
+        self.sensors = {}
+        for cls, settings in sensor_settings.items():
+            sensor = cls(settings, self.sim)
+            if sensor.available:
+                self.sensors[cls] = sensor
+
+    @staticmethod
+    def check_params(params):
+        """(SimSettings, {sensor class: its settings or None}) from ``params``, checked without building
+        anything; an unknown name or a bad value is a :class:`SettingsError`."""
         params = dict(params or {})
         classes = all_sensor_classes()
         known = {f.name for f in dataclasses.fields(SimSettings)}
@@ -28,13 +40,8 @@ class Rig:
 
         def get(name, default):
             return params.get(name[1:], default)
-        self.settings = from_params(SimSettings, get)
-        self.sim = Simulation(world, self.settings, urdf)
-        self.sensors = {}
-        for cls in classes:
-            sensor = cls(from_params(cls.settings_class, get) if cls.settings_class else None, self.sim)
-            if sensor.available:
-                self.sensors[cls] = sensor
+        return from_params(SimSettings, get), {
+            cls: from_params(cls.settings_class, get) if cls.settings_class else None for cls in classes}
 
     @property
     def all_settings(self):

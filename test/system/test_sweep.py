@@ -1,0 +1,130 @@
+"""Sweeps on real Dask clusters: a local one of two processes, and a `dask scheduler` with two `dask worker`
+processes on 127.0.0.1; a malformed sweep file; an episode that fails; an interrupted sweep resumed."""
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import ROOT, free_port
+
+from closed_loop import sweep, sweep_file, tune_thresholds
+from closed_loop.episode import EpisodeSpec
+
+TINY = """name: tiny
+base: {world: wall, controller: stop_on_obstacle, time_limit_s: 15}
+grid:
+  settings.stop_distance: [0.1, 0.3]
+  settings.cruise_speed: [0.5, 1.0]
+  seed: [0, 1]
+plot: {x: settings.stop_distance, lines: settings.cruise_speed}
+"""
+#: Bounds that only catch hangs.
+HANG_S = 240.0
+
+
+def rows_of(path):
+    with open(path, newline='') as f:
+        return list(csv.DictReader(f))
+
+
+def test_a_tiny_sweep_on_a_local_cluster_writes_rows_summary_plot_and_a_recommendation(tmp_path, capsys):
+    spec = tmp_path / 'tiny.yaml'
+    spec.write_text(TINY)
+    assert sweep.main([str(spec), '--output', str(tmp_path / 'out'), '--workers', '2']) == 0
+    rows = rows_of(tmp_path / 'out' / 'rows.csv')
+    assert len(rows) == 8 and len({r['spec'] for r in rows}) == 8
+    by_stop = {s: [r for r in rows if r['settings.stop_distance'] == s] for s in ('0.1', '0.3')}
+    assert all(r['outcome'] == 'collided' for r in by_stop['0.1'])      # the front is 0.15 m ahead of the LIDAR
+    assert all(r['outcome'] == 'stopped' and float(r['min_clearance_m']) > 0.1 for r in by_stop['0.3'])
+    assert (tmp_path / 'out' / 'plot.png').read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+    assert 'contact rate' in (tmp_path / 'out' / 'summary.txt').read_text()
+    out = tmp_path / 'tune'
+    assert tune_thresholds.main(['--speeds', '0.5', '--stops', '0.1,0.3', '--worlds', 'wall', '--seeds', '1',
+                                 '--noise', '0', '--workers', '2', '--output', str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert 'rule: recommended stop_distance: the smallest tried' in printed
+    assert 'cruise 0.50 m/s: stop_distance 0.30 m, slow_distance 0.80 m' in printed
+
+
+@pytest.mark.parametrize('text, message', [
+    ('name: x\ngrid: [1, 2\n', 'not valid YAML'),
+    ('name: x\ngrid: {seed: [0]}\ncolour: red\n', 'colour: expected only name, base, grid and plot'),
+    ('name: x\ngrid: {speed: [0.5]}\n', 'grid.speed: expected an episode field'),
+    ('name: x\ngrid: {settings.stop_distance: {from: 0.5, to: 0.1, step: 0.1}}\n', 'expected step > 0 and to >= from'),
+    ('name: x\ngrid: {settings.stop_distance: [0.5, 1.5]}\n', 'settings.stop_distance=1.5'),
+    ('name: x\nbase: {world: atlantis}\ngrid: {seed: [0]}\n', 'world'),
+    ('name: ../x\ngrid: {seed: [0]}\n', 'name: expected 1 to 64 letters'),
+    ('name: x\ngrid: {seed: [0]}\nplot: {x: settings.stop_distance}\n', 'plot.x: expected one of the grid keys'),
+])
+def test_a_malformed_sweep_file_is_refused_before_anything_runs(tmp_path, capsys, text, message):
+    spec = tmp_path / 'bad.yaml'
+    spec.write_text(text)
+    assert sweep.main([str(spec), '--output', str(tmp_path / 'out')]) == 2
+    error = capsys.readouterr().err
+    assert str(spec) in error and message in error
+    assert not (tmp_path / 'out').exists()
+
+
+def test_an_episode_that_fails_is_a_row_with_its_error_and_the_sweep_goes_on(tmp_path):
+    good = EpisodeSpec(world='wall', time_limit_s=10.0)
+    bad = EpisodeSpec(world='wall', robot='no_such_robot', time_limit_s=10.0)     # past the file's checks
+    built = sweep_file.Sweep('mixed', ['robot'], [({'robot': 'closed_loop'}, good), ({'robot': 'no_such_robot'}, bad)])
+    rows = sweep.run(built, str(tmp_path / 'out'), workers=2)
+    outcome = {r['robot']: r for r in rows}
+    assert outcome['closed_loop']['outcome'] == 'stopped'
+    assert outcome['no_such_robot']['outcome'] == 'error' and 'no_such_robot' in outcome['no_such_robot']['error']
+
+
+def test_a_sweep_runs_on_a_dask_scheduler_and_workers_started_by_hand(tmp_path):
+    dask = os.path.join(os.path.dirname(sys.executable), 'dask')
+    port = free_port()
+    address = 'tcp://127.0.0.1:%d' % port
+    logs = open(tmp_path / 'dask.log', 'w')
+    procs = [subprocess.Popen([dask, 'scheduler', '--host', '127.0.0.1', '--port', str(port),
+                               '--no-dashboard'], stdout=logs, stderr=logs)]
+    try:
+        procs += [subprocess.Popen([dask, 'worker', address, '--nworkers', '1', '--nthreads', '1', '--host',
+                                    '127.0.0.1', '--no-dashboard', '--name', 'w%d' % i],
+                                   stdout=logs, stderr=logs) for i in range(2)]
+        spec = tmp_path / 'tiny.yaml'
+        spec.write_text(TINY)
+        assert sweep.main([str(spec), '--output', str(tmp_path / 'out'), '--scheduler', address]) == 0
+        assert len(rows_of(tmp_path / 'out' / 'rows.csv')) == 8
+        log = (tmp_path / 'dask.log').read_text()
+        assert log.count('Register worker') >= 2, log[-2000:]
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        logs.close()
+
+
+def test_an_interrupted_sweep_keeps_its_rows_and_resumes_where_it_stopped(tmp_path):
+    spec = tmp_path / 'longer.yaml'
+    spec.write_text(TINY.replace('seed: [0, 1]', 'seed: [0, 1, 2, 3, 4, 5]'))
+    out = tmp_path / 'out'
+    env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, 'src') + os.pathsep + os.environ.get('PYTHONPATH', ''))
+    p = subprocess.Popen([sys.executable, '-m', 'closed_loop.sweep', str(spec), '--output', str(out),
+                          '--workers', '2'], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + HANG_S
+    while time.monotonic() < deadline and (not (out / 'rows.csv').exists() or len(rows_of(out / 'rows.csv')) < 3):
+        time.sleep(0.05)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=HANG_S)
+    assert p.returncode == 130, err
+    assert '--resume' in err
+    kept = rows_of(out / 'rows.csv')
+    assert 3 <= len(kept) < 24
+    assert sweep.main([str(spec), '--output', str(out)]) == 2                   # not over it without --resume
+    assert sweep.main([str(spec), '--output', str(out), '--resume', '--workers', '2']) == 0
+    rows = rows_of(out / 'rows.csv')
+    assert len(rows) == 24 and len({r['spec'] for r in rows}) == 24
+    assert [r['spec'] for r in rows[:len(kept)]] == [r['spec'] for r in kept]
