@@ -196,7 +196,8 @@ def prepare(spec, cache=None):
         raise EpisodeError('settings, sim: expected mappings of ~parameters')
     settings, *extra = controller_settings(cls, dict(profile.node_params(cls.name), **spec.settings))
     sim_params = dict(profile.node_params('sim'), camera=False, ray_caster='planar',
-                      scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed, **spec.sim)
+                      scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed)
+    sim_params.update(spec.sim)
     try:
         Rig.check_params(sim_params)
     except SettingsError as error:

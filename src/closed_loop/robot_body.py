@@ -3,6 +3,7 @@ and odometry (:class:`Robot`), what to build it from (:class:`RobotSetup`), and 
 the simulation (:class:`RobotView`). The simulation owns the pybullet client, the world and ``step()``;
 a robot makes its pybullet calls through it. Free of ROS.
 """
+import math
 import tempfile
 from dataclasses import dataclass
 
@@ -201,8 +202,15 @@ class Robot:
     def clearance(self, max_m):
         """Least distance (m) between this robot's collision shapes and any obstacle or other robot, looked
         for up to ``max_m`` (inf when nothing is that close; 0 or less in contact)."""
-        found = [c[8] for uid in self.obstacle_ids
-                 for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)]
+        solids = self.obstacle_ids
+        # Only the obstacles that may be that close are asked (those whose footprint's circle comes within
+        # max_m of the circle round this robot's), and every other robot.
+        fp = self.model.footprint
+        radius = math.hypot(max(-fp.x_min, fp.x_max), max(-fp.y_min, fp.y_max))
+        x, y = self._call(pybullet.getBasePositionAndOrientation, self.robot_id)[0][:2]
+        near = self.sim.obstacles_near(x, y, max_m + radius)
+        asked = [uid for uid in solids if uid in near or uid not in self.sim.obstacle_uids]
+        found = [c[8] for uid in asked for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)]
         return min(found, default=float('inf'))
 
     def within(self, uid, distance_m):

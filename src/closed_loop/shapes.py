@@ -129,6 +129,11 @@ class Cylinder:
 SHAPES = {'box': Box, 'cylinder': Cylinder}
 
 
+def bounding_radius(obstacle):
+    """The radius (m) of a circle round the obstacle's footprint, about its centre."""
+    return obstacle.radius if obstacle.shape == 'cylinder' else 0.5 * math.hypot(obstacle.size[0], obstacle.size[1])
+
+
 def distance(obstacle, x_m, y_m):
     """Signed distance (m) from the point to the obstacle's footprint: negative inside."""
     return SHAPES[obstacle.shape].distance(obstacle, x_m, y_m)

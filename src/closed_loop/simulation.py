@@ -128,12 +128,19 @@ class Simulation:
         self._call(p.changeDynamics, self.ground_id, -1, lateralFriction=1.0)
         self._obstacle_ids = {}
         self._movers = {}  # uid -> (obstacle, path corners, cycle length m)
+        uids = []
         for obstacle in self.world.obstacles:
             uid = self._add_obstacle(obstacle)
             self._obstacle_ids[uid] = obstacle.name
+            uids.append(uid)
             if obstacle.motion is not None:
                 points, cycle_m = obstacles.motion_path(obstacle)
                 self._movers[uid] = (obstacle, points, cycle_m)
+        # Each obstacle's uid, centre at rest and the radius of a circle round its footprint, for
+        # obstacles_near; a mover's centre is read when asked.
+        self._extent_uids = np.array(uids, dtype=np.int64)
+        self._extent_centres = np.array([o.position[:2] for o in self.world.obstacles], float).reshape(-1, 2)
+        self._extent_radii = np.array([shapes.bounding_radius(o) for o in self.world.obstacles], float)
 
     def _add_obstacle(self, obstacle):
         shape, visual = shapes.SHAPES[obstacle.shape].pybullet_shapes(obstacle, self._call, pybullet)
@@ -206,6 +213,23 @@ class Simulation:
             else:
                 out.append((obstacle, tuple(obstacle.position)))
         return out
+
+    @property
+    def obstacle_uids(self):
+        """The body uids of the world's obstacles."""
+        return self._obstacle_ids.keys()
+
+    def obstacles_near(self, x, y, reach_m):
+        """The uids of the obstacles whose footprint comes within ``reach_m`` of the point (x, y), or may
+        (the test is on a circle round each footprint)."""
+        centres = self._extent_centres
+        if self._movers:
+            centres = centres.copy()
+            for index, uid in enumerate(self._extent_uids):
+                if int(uid) in self._movers:
+                    centres[index] = self._call(pybullet.getBasePositionAndOrientation, int(uid))[0][:2]
+        near = np.hypot(centres[:, 0] - x, centres[:, 1] - y) - self._extent_radii <= reach_m
+        return set(int(uid) for uid in self._extent_uids[near])
 
     @property
     def has_moving_obstacles(self):
