@@ -240,28 +240,43 @@ def _default_plot(keys, rows):
     return {'x': numeric[0], 'lines': numeric[1] if len(numeric) > 1 else None}
 
 
+def add_cluster_arguments(parser):
+    """The options every sweep command has: where it runs, and --resume."""
+    parser.add_argument('--scheduler', help='tcp://HOST:PORT of a running Dask scheduler (default: a local '
+                        'cluster of one worker process per core)')
+    parser.add_argument('--workers', type=int, help='local cluster size (default: the number of cores)')
+    parser.add_argument('--resume', action='store_true', help='go on with the rows already in --output')
+
+
+def run_command(prog, make, output, args):
+    """What a sweep command does: build the sweep (``make()``), run it into ``output`` (default
+    sweeps/NAME) and report. Returns (exit status, sweep, rows); a refused sweep (2) or Ctrl-C (130)
+    is said on stderr, with no sweep or rows."""
+    try:
+        built = make()
+        output = output or os.path.join('sweeps', built.name)
+        print('%s %s: %d episodes -> %s' % (prog, built.name, len(built.specs), output), flush=True)
+        rows = run(built, output, args.scheduler, args.workers, args.resume)
+    except sweep_file.SweepError as error:
+        print('%s: %s' % (prog, error), file=sys.stderr)
+        return 2, None, None
+    except KeyboardInterrupt:
+        print('\n%s: interrupted; the rows done are kept: run again with --resume to finish' % prog, file=sys.stderr)
+        return 130, None, None
+    report(built, rows, output)
+    return 0, built, rows
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(prog='sweep', description=__doc__.splitlines()[0])
     parser.add_argument('spec', help='the sweep file (YAML)')
     parser.add_argument('--output', help='directory for rows.csv, summary.txt and plot.png '
                         '(default: sweeps/NAME in the current directory)')
-    parser.add_argument('--scheduler', help='tcp://HOST:PORT of a running Dask scheduler (default: a local '
-                        'cluster of one worker process per core)')
-    parser.add_argument('--workers', type=int, help='local cluster size (default: the number of cores)')
-    parser.add_argument('--resume', action='store_true', help='go on with the rows already in --output')
+    add_cluster_arguments(parser)
     args = parser.parse_args(argv)
-    try:
-        sweep = sweep_file.load(args.spec)
-        output = args.output or os.path.join('sweeps', sweep.name)
-        print('sweep %s: %d episodes -> %s' % (sweep.name, len(sweep.specs), output), flush=True)
-        rows = run(sweep, output, args.scheduler, args.workers, args.resume)
-    except sweep_file.SweepError as error:
-        print('sweep: %s' % error, file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print('\nsweep: interrupted; the rows done are kept: run again with --resume to finish', file=sys.stderr)
-        return 130
-    report(sweep, rows, output)
+    status, _, rows = run_command('sweep', lambda: sweep_file.load(args.spec), args.output, args)
+    if status:
+        return status
     errors = sum(r['outcome'] == 'error' for r in rows)
     print('episodes: %d, errors: %d' % (len(rows), errors))
     return 1 if errors else 0

@@ -13,7 +13,6 @@ It prints that rule, the recommendation per speed and the evidence (per stop dis
 least clearance), and writes the rows, the summary and the plot as a sweep does.
 """
 import argparse
-import os
 import sys
 
 from closed_loop import sweep, sweep_file
@@ -82,23 +81,15 @@ def main(argv=None):
     parser.add_argument('--noise', type=_floats, default=[0.0, 0.01], help='LIDAR noise levels (std), m')
     parser.add_argument('--margin', type=float, default=0.05, help='least clearance required, m')
     parser.add_argument('--time-limit', type=float, default=30.0, help='simulated seconds per episode')
-    parser.add_argument('--output', default=os.path.join('sweeps', 'tune_thresholds'))
-    parser.add_argument('--scheduler', help='tcp://HOST:PORT of a running Dask scheduler')
-    parser.add_argument('--workers', type=int, help='local cluster size (default: the number of cores)')
-    parser.add_argument('--resume', action='store_true')
+    parser.add_argument('--output', help='directory for the rows, summary and plot (default: '
+                        'sweeps/tune_thresholds)')
+    sweep.add_cluster_arguments(parser)
     args = parser.parse_args(argv)
-    try:
-        built = build(args.speeds, args.stops, [w for w in args.worlds.split(',') if w], list(range(args.seeds)),
-                      args.noise, args.time_limit)
-        print('tune_thresholds: %d episodes -> %s' % (len(built.specs), args.output), flush=True)
-        rows = sweep.run(built, args.output, args.scheduler, args.workers, args.resume)
-    except sweep_file.SweepError as error:
-        print('tune_thresholds: %s' % error, file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print('\ntune_thresholds: interrupted; the rows done are kept: --resume to finish', file=sys.stderr)
-        return 130
-    sweep.report(built, rows, args.output)
+    status, _, rows = sweep.run_command('tune_thresholds', lambda: build(
+        args.speeds, args.stops, [w for w in args.worlds.split(',') if w], list(range(args.seeds)), args.noise,
+        args.time_limit), args.output, args)
+    if status:
+        return status
     print()
     print('rule: ' + RULE % (args.margin, SLOW_LEAD_S))
     for speed, (stop, evidence) in sorted(recommend(rows, args.margin).items()):

@@ -5,7 +5,9 @@ contact) or 'hold'; ~goal_x, ~goal_y (world frame, m): the goal expected (defaul
 origin); ~send_goal: send that goal on move_base_simple/goal (frame world, as rviz's "2D Nav Goal" does)
 once the robot is under way, and expect it followed; ~hold_after_x (m, optional): with no goal, once the
 robot is ~passed_by_m (3 m) past this x its heading is within 10 degrees of the start heading, judged over
-the next ~hold_window_m (0.5 m) of travel; ~limit_s: simulated seconds allowed."""
+the next ~hold_window_m (0.5 m) of travel; ~limit_s: simulated seconds allowed; ~episode_world (a world
+name, optional): run the same scenario (world, ~episode_robot, goal, the navigator's parameters as the graph
+has them, limit) through the episode runner (closed_loop.episode) too, and require the same outcome."""
 import math
 import os
 import sys
@@ -18,8 +20,9 @@ from std_msgs.msg import String, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
+from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
-from closed_loop.navigator import NavState  # noqa: E402
+from closed_loop.navigator import GoalSettings, NavigatorSettings, NavState  # noqa: E402
 
 HOLD_TOLERANCE_RAD = math.radians(10.0)
 PASSED_BY_M = 3.0
@@ -101,6 +104,28 @@ class Avoid(unittest.TestCase):
                     self.assertLess(abs(yaw), HOLD_TOLERANCE_RAD, 'heading %.1f deg at x = %.2f m; track: %s'
                                     % (math.degrees(yaw), x, where))
             self.assertNotIn(NavState.REACHED.name, seen)
+        world = rospy.get_param('~episode_world', None)
+        if world is not None:
+            self.agrees_with_episode(expect, world, goal, limit_s)
+
+    def agrees_with_episode(self, expect, world, goal, limit_s):
+        """The episode runner, given what the graph was given, ends the same way: REACHED within the goal
+        radius; or trapped (RECOVERING, never REACHED); with no contact either way."""
+        fields = {f for cls in (NavigatorSettings, GoalSettings) for f in cls.__dataclass_fields__}
+        settings = {k: v for k, v in rospy.get_param('/avoid_obstacles', {}).items() if k in fields}
+        result = run_episode(EpisodeSpec(world=world, robot=rospy.get_param('~episode_robot', 'closed_loop'),
+                                         controller='avoid_obstacles', settings=settings,
+                                         goal=goal if expect == 'reached' else None, time_limit_s=limit_s,
+                                         keep_trajectory=True))
+        modes = [row[7] for row in result.trajectory]
+        rospy.loginfo('episode: %s, %s, %.1f s, modes seen %s', result.outcome, result.mode, result.time_s,
+                      sorted(set(m for m in modes if m)))
+        self.assertEqual(result.contacts, 0, 'the episode touched: %s' % result)
+        if expect == 'reached':
+            self.assertEqual(result.outcome, 'reached', 'the graph reached the goal, the episode: %s' % result)
+        else:
+            self.assertNotIn(NavState.REACHED.name, modes)
+            self.assertIn(NavState.RECOVERING.name, modes, 'the graph was trapped, the episode: %s' % result)
 
 
 if __name__ == '__main__':
