@@ -33,4 +33,6 @@ def test_developer_tools_are_not_executables_for_catkin():
     # catkin_lint reports an executable that is not installed; tools/ are run as `bash tools/x.sh`,
     # `python3 tools/x.py`.
     for name in os.listdir(os.path.join(ROOT, 'tools')):
-        assert not os.access(os.path.join(ROOT, 'tools', name), os.X_OK), 'tools/%s is executable' % name
+        path = os.path.join(ROOT, 'tools', name)
+        if os.path.isfile(path):       # (a directory, such as a __pycache__ of `make compat`, is not a program)
+            assert not os.access(path, os.X_OK), 'tools/%s is executable' % name
