@@ -11,8 +11,8 @@ from closed_loop.world import (NAMED_COLORS, Obstacle, Pose2D,
                                WorldError, available_worlds, load_world, parse_world, resolve_world)
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
-SHIPPED = ('corridor', 'dead_end', 'empty', 'obstacle_course', 'obstacle_left', 'obstacle_right', 'posts', 'red_box',
-           'slalom', 'two_robots', 'wall')
+SHIPPED = ('corridor', 'dead_end', 'empty', 'obstacle_course', 'obstacle_left', 'obstacle_right', 'person_and_wall',
+           'person_crossing', 'posts', 'red_box', 'slalom', 'two_robots', 'wall')
 RED = (0.9, 0.05, 0.05, 1.0)
 # Sampling step along paths and in time for the clearance checks; fine enough for 0.2 m objects.
 STEP_M = 0.05
