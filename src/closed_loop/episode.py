@@ -14,9 +14,10 @@ within the physics step); the controller's timer at its ``rate_hz``, ``timer_pha
 half a LIDAR period: the mean of a phase the node's start-up puts anywhere) after each scan; a command, from the timer or at once from
 a scan (new danger), reaches the wheels ``command_delay_s`` later. That delay is one physics step: the
 reaction benchmark (``bench_loop``) measures scan-to-zero-command delivery of a few milliseconds at real
-time, and the simulator applies a command at its next physics step. The camera is off (no controller
-here uses it). The LIDAR is cast with the planar caster (``closed_loop.planar_rays``): exact, and many
-times cheaper in clutter.
+time, and the simulator applies a command at its next physics step. The camera is on only for a controller
+that looks at it (the fusion controller), its frames half a period after the scans, as the simulator node
+has them. The LIDAR is cast with the planar caster (``closed_loop.planar_rays``): exact, and many times
+cheaper in clutter.
 
 Everything judged comes from ground truth: contacts every physics step, the least clearance between the
 robot's collision shapes and any obstacle at the controller's rate, the path, the deceleration.
@@ -33,6 +34,7 @@ from closed_loop.geometry import quaternion_yaw
 from closed_loop.profiles import PACKAGE_ROOT, load_profile
 from closed_loop.rig import Rig
 from closed_loop.scan import Scan
+from closed_loop.sensors.camera import Camera
 from closed_loop.sensors.lidar import Lidar
 from closed_loop.settings import SettingsError, check
 from closed_loop.world import load_world, parse_world, resolve_world
@@ -165,6 +167,7 @@ class Prepared:
     sim_params: dict
     goal_odom: Optional[tuple]
     goal_world: Optional[tuple]
+    extra_settings: list = dataclasses.field(default_factory=list)
 
 
 def prepare(spec, cache=None):
@@ -195,7 +198,7 @@ def prepare(spec, cache=None):
     if not isinstance(spec.settings, dict) or not isinstance(spec.sim, dict):
         raise EpisodeError('settings, sim: expected mappings of ~parameters')
     settings, *extra = controller_settings(cls, dict(profile.node_params(cls.name), **spec.settings))
-    sim_params = dict(profile.node_params('sim'), camera=False, ray_caster='planar',
+    sim_params = dict(profile.node_params('sim'), camera=cls.uses_camera, ray_caster='planar',
                       scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed)
     sim_params.update(spec.sim)
     try:
@@ -217,7 +220,7 @@ def prepare(spec, cache=None):
         d = extra[0].goal_distance
         goal = (d, 0.0)
         goal_world = (start.x + d * math.cos(start.yaw), start.y + d * math.sin(start.yaw))
-    return Prepared(profile, cls, world, settings, sim_params, goal, goal_world)
+    return Prepared(profile, cls, world, settings, sim_params, goal, goal_world, extra)
 
 
 def run_episode(spec, cache=None):
@@ -227,8 +230,12 @@ def run_episode(spec, cache=None):
     laser_pose = p.profile.laser_pose(p.settings.scan_frame)
     rig = Rig(p.world, p.sim_params, p.profile.urdf)
     try:
+        try:
+            camera_pose = p.profile.laser_pose(rig.sim.model.names.camera_frame)
+        except ValueError:
+            camera_pose = None
         controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, (0.0, 0.0, 0.0),
-                                                            p.goal_odom))
+                                                            p.goal_odom, camera_pose), *p.extra_settings)
         result = _loop(spec, rig, controller, p.goal_world)
     finally:
         rig.close()
@@ -246,6 +253,10 @@ def _loop(spec, rig, controller, goal_world):
     steps_per_tick = max(1, int(round(1.0 / controller.settings.rate_hz / dt)))
     phase = int(round(spec.timer_phase_s / dt)) % steps_per_tick
     delay = max(1, int(round(spec.command_delay_s / dt)))
+    camera = rig.sensors.get(Camera) if controller.uses_camera else None
+    if camera is not None:
+        steps_per_frame = max(1, int(round(camera.period_s / dt)))
+        frame_phase = int(round(camera.offset_s / dt)) % steps_per_frame
     pending = []                      # (step, command), in order
     contacts, touching, clearance, path_m, peak_decel = 0, set(), math.inf, 0.0, 0.0
     pose, _ = sim.ground_truth()
@@ -261,6 +272,8 @@ def _loop(spec, rig, controller, goal_world):
             scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
                         lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
             sent = controller.on_scan(now, scan, odom)
+        if camera is not None and k % steps_per_frame == frame_phase:
+            controller.on_frame(now, camera.sample(sim), camera.intrinsics, odom)
         if k % steps_per_tick == phase:
             sent = controller.on_tick(now, odom)
             pose, (linear, angular) = sim.ground_truth()

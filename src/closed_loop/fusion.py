@@ -119,3 +119,40 @@ def fresh_detection(detection_u, frame_stamp_s, now_s, settings):
         return None
     age = now_s - frame_stamp_s
     return detection_u if -settings.max_frame_age <= age <= settings.max_frame_age else None
+
+
+@dataclasses.dataclass
+class WaitSettings:
+    """When the fusion controller waits (its ``~parameters``)."""
+    look_ahead: float = param(2.5, 'm', 'a PERSON or UNKNOWN track within this far ahead, in the robot\'s path, '
+                              'makes it wait', minimum=0.2, maximum=10.0, live=True)
+    path_margin: float = param(0.2, 'm', 'the path is the robot\'s width plus this much each side (and the '
+                               'track\'s half-size)', minimum=0.0, maximum=2.0, live=True)
+    predict_s: float = param(2.0, 's', 'a moving track counts as in the path if its straight-line motion '
+                             'brings it there within this time', minimum=0.0, maximum=10.0, live=True)
+    hold_s: float = param(1.0, 's', 'the path must be clear this long before the robot goes on', minimum=0.0,
+                          maximum=30.0, live=True)
+    unknown_look_ahead: float = param(1.0, 'm', 'an UNKNOWN track (too new to tell) makes the robot wait only '
+                                      'this near; farther, it will be known before the robot gets there',
+                                      minimum=0.2, maximum=10.0, live=True)
+
+
+#: Predicted positions of a moving track are checked this often (s) over ``predict_s``.
+PREDICT_STEP_S = 0.25
+
+
+def in_path(track, robot_pose, half_width, now_s, settings, look_ahead=None):
+    """True if ``track`` (odom), now or along its straight-line motion over ``predict_s``, lies in the
+    rectangle ahead of a robot at ``robot_pose``: 0 to ``look_ahead`` (default the settings') along its
+    heading, ``half_width`` (the robot's half-width) plus ``path_margin`` plus the track's half-size either
+    side."""
+    look_ahead = settings.look_ahead if look_ahead is None else look_ahead
+    reach = half_width + settings.path_margin + 0.5 * track.size
+    steps = int(settings.predict_s / PREDICT_STEP_S) if track.moving else 0
+    px, py = track.predicted(now_s)
+    for k in range(steps + 1):
+        t = k * PREDICT_STEP_S
+        bx, by = to_base(robot_pose, px + track.vx * t, py + track.vy * t)
+        if 0.0 < bx <= look_ahead + 0.5 * track.size and abs(by) <= reach:
+            return True
+    return False

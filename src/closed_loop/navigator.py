@@ -161,10 +161,9 @@ class Navigator:
     ``hold_lookahead`` ahead of itself along the start heading, so after an obstacle it turns back to that
     heading (on a line beside the first one), and it never reaches anything; the way round keeps within
     ``hold_corridor`` of that line, so a wall across the whole way is a block it stops at, not a thing to
-    go round. No progress
-    toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (back up if the rear is clear, turn
-    in place toward the other side than last time if that is safe, then seek again); none for
-    ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
+    go round. No progress toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (back up
+    if the rear is clear, turn in place toward the other side than last time if that is safe, then seek
+    again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
     """
 
     def __init__(self, settings, start_pose, goal_xy=None, on_transition=None):
@@ -189,6 +188,7 @@ class Navigator:
         self._progress_s = now_s     # the last progress (give_up_timeout counts from it)
         self._stuck_from_s = now_s   # the last progress or the end of the last recovery (stuck_timeout)
         self._recovery = None
+        self._command = None         # the first step is taken from the measured speed
         if self.state is not NavState.GOAL_SEEKING and now_s is not None:
             self._enter(NavState.GOAL_SEEKING, now_s, 'new goal')
 

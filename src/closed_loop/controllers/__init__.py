@@ -16,9 +16,9 @@ import pkgutil
 Odom = collections.namedtuple('Odom', 'x y yaw v w stamp_s')
 
 #: What a controller knows of the robot and the task: the laser's pose on the base
-#: (``robot_model.Pose2DInBase``), the footprint rectangle, the start pose (x, y, yaw) in odom, and the
-#: goal (x, y) in odom, or None.
-Context = collections.namedtuple('Context', 'laser_pose footprint start goal')
+#: (``robot_model.Pose2DInBase``), the footprint rectangle, the start pose (x, y, yaw) in odom, the
+#: goal (x, y) in odom or None, and the camera's pose on the base (None: no camera).
+Context = collections.namedtuple('Context', 'laser_pose footprint start goal camera_pose', defaults=(None,))
 
 
 class ControllerError(ValueError):
@@ -34,6 +34,8 @@ class Controller:
     #: An episode of it ends once the robot has been at rest under a zero command for a while (a stop
     #: controller's end); False for one that rests and goes on (the navigator waits and recovers).
     ends_at_rest = True
+    #: True for a controller that looks at the camera: the episode turns it on and calls :meth:`on_frame`.
+    uses_camera = False
 
     def __init__(self, settings, context):
         self.settings = settings
@@ -50,6 +52,9 @@ class Controller:
     def on_tick(self, now_s, odom):
         """The timer fires at ``now_s``: the command to send."""
         raise NotImplementedError
+
+    def on_frame(self, now_s, rgb, intrinsics, odom):
+        """A camera frame (an RGB image, ``sensors.camera.CameraIntrinsics``) at ``now_s``."""
 
 
 def controller_classes():

@@ -14,7 +14,7 @@ class AvoidObstacles(Controller):
     extra_settings_classes = (GoalSettings,)
     ends_at_rest = False
 
-    def __init__(self, settings, context):
+    def __init__(self, settings, context, goal_settings=None):
         Controller.__init__(self, settings, context)
         self.navigator = Navigator(settings, context.start, context.goal)
         self.scan = None
