@@ -37,12 +37,13 @@ class Opinion:
 
 @dataclasses.dataclass(frozen=True)
 class FusionStep:
-    """One decision: the mode (WAITING, or the navigator's state's name), the command, why, and the
-    opinions of every track."""
-    mode: str
+    """One decision: the state (``FusionState.WAITING``, or the navigator's ``NavState``), the command,
+    why, the navigator's plan if it made one, and the opinions of every track."""
+    state: enum.Enum
     linear_x: float
     angular_z: float
     reason: str
+    plan: object = None
     opinions: tuple = ()
 
 
@@ -51,8 +52,8 @@ class FusionNavigator:
     ``fusion.CameraModel``, or None for none."""
 
     def __init__(self, nav_settings, tracker_settings, fusion_settings, wait_settings, start_pose, goal_xy,
-                 camera=None):
-        self.navigator = Navigator(nav_settings, start_pose, goal_xy)
+                 camera=None, on_transition=None):
+        self.navigator = Navigator(nav_settings, start_pose, goal_xy, on_transition=on_transition)
         self.tracker = Tracker(tracker_settings)
         self.fusion_settings, self.wait_settings = fusion_settings, wait_settings
         self.camera = camera
@@ -61,6 +62,17 @@ class FusionNavigator:
         self._last_scan = None
         self._detection = None           # (pixel column or None, frame stamp s, robot pose at the frame)
         self.opinions = ()
+
+    @property
+    def goal(self):
+        return self.navigator.goal
+
+    def set_goal(self, goal_xy, now_s=None):
+        """Head for a new goal (odom), or hold the start heading (None); the tracks stay."""
+        self.navigator.set_goal(goal_xy, now_s)
+
+    def reconfigure(self, settings):
+        self.navigator.reconfigure(settings)
 
     def on_detection(self, u, stamp_s, pose):
         """A camera frame's red detection: its pixel column (None: no red in it), stamp and the robot's pose."""
@@ -88,16 +100,16 @@ class FusionNavigator:
         if blocking:
             self.waiting, self._clear_since = True, None
             o = blocking[0]
-            return FusionStep(FusionState.WAITING.name, 0.0, 0.0, 'waiting: %s track %d in the path (%s)'
-                              % (o.belief.name, o.track.id, o.why), self.opinions)
+            return FusionStep(FusionState.WAITING, 0.0, 0.0, 'waiting: %s track %d in the path (%s)'
+                              % (o.belief.name, o.track.id, o.why), None, self.opinions)
         if self.waiting:
             if self._clear_since is None:
                 self._clear_since = now_s
             clear_s = now_s - self._clear_since
             if clear_s < self.wait_settings.hold_s:
-                return FusionStep(FusionState.WAITING.name, 0.0, 0.0, 'path clear for %.1f s (hold_s %.1f s)'
-                                  % (clear_s, self.wait_settings.hold_s), self.opinions)
+                return FusionStep(FusionState.WAITING, 0.0, 0.0, 'path clear for %.1f s (hold_s %.1f s)'
+                                  % (clear_s, self.wait_settings.hold_s), None, self.opinions)
             self.waiting = False
             self.navigator.set_goal(self.navigator.goal, now_s)        # a wait is not being stuck
         step = self.navigator.update(now_s, pose, v0, w0, scan, laser_pose, footprint)
-        return FusionStep(step.state.name, step.linear_x, step.angular_z, step.reason, self.opinions)
+        return FusionStep(step.state, step.linear_x, step.angular_z, step.reason, step.plan, self.opinions)

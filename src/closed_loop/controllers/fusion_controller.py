@@ -68,7 +68,7 @@ class FusionController(Controller):
             return self.sent
         self.decision_ms.append((time.perf_counter() - started) * 1e3)
         self.sent = (step.linear_x, step.angular_z)
-        self.mode = step.mode
-        self.finished = step.mode in (NavState.REACHED.name, NavState.FAILED.name)
-        self.log.append((now_s, step.mode, tuple((o.track.id, o.belief.name, o.in_path) for o in step.opinions)))
+        self.mode = step.state.name
+        self.finished = step.state in (NavState.REACHED, NavState.FAILED)
+        self.log.append((now_s, self.mode, tuple((o.track.id, o.belief.name, o.in_path) for o in step.opinions)))
         return self.sent

@@ -149,10 +149,17 @@ class AvoidObstacles(StopsOnShutdown):
         if goal is None and self.goal_settings.goal_distance > 0:
             d = self.goal_settings.goal_distance
             goal = (x + d * math.cos(yaw), y + d * math.sin(yaw))
-        self.navigator = Navigator(self.settings, (x, y, yaw), goal, on_transition=self._on_transition)
+        self.navigator = self.make_navigator((x, y, yaw), goal)
         self._publish_goal(goal)
         rospy.loginfo('start at (%.2f, %.2f, %.2f rad) in %s; %s', x, y, yaw, self.odom_frame,
                       'goal (%.2f, %.2f)' % goal if goal is not None else 'no goal: holding the start heading')
+
+    def make_navigator(self, start, goal):
+        """The core this node drives (a subclass may drive another with the same interface)."""
+        return Navigator(self.settings, start, goal, on_transition=self._on_transition)
+
+    def after_step(self, step):
+        """Called after each decision is sent (lock held); a subclass publishes more from it."""
 
     def _on_goal(self, msg):
         try:
@@ -218,6 +225,7 @@ class AvoidObstacles(StopsOnShutdown):
             self._publish_mode(step.state, step.reason)
             if step.plan is not None and self.plan_pub.get_num_connections() > 0:
                 self.plan_pub.publish(self._plan_markers(step.plan))
+            self.after_step(step)
 
     def _input_problem(self, now):
         s = self.settings
