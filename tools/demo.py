@@ -4,8 +4,8 @@ what the robot did, from the simulator's ground truth.
 
 Usage (inside ``source env.sh``): python3 tools/demo.py [--world wall] [--controller stop_on_obstacle]
                                                         [--seconds 30] [launch args, e.g. gui:=true]
-With ``--controller avoid_obstacles`` it runs avoid.launch toward the world's goal (``goal:`` in the world
-file, else 10 m ahead) and says whether and when it was reached.
+With ``--controller avoid_obstacles`` (or ``fusion_controller``) it runs avoid.launch (fusion.launch) toward the
+world's goal (``goal:`` in the world file, else 10 m ahead) and says whether and when it was reached.
 """
 import argparse
 import dataclasses
@@ -29,8 +29,8 @@ AT_REST_MPS = 0.01
 REST_TO_FINISH_S = 2.0
 MASTER_WAIT_S = 30.0
 CLEARANCE_PERIOD_S = 0.1
-# The controller that takes a goal; its demo ends when it has reached it or given up.
-NAVIGATOR = 'avoid_obstacles'
+# The controllers that take a goal, and their launch files; their demo ends when they have reached it or given up.
+NAVIGATORS = {'avoid_obstacles': 'avoid.launch', 'fusion_controller': 'fusion.launch'}
 NAVIGATOR_DONE = ('REACHED', 'FAILED')
 
 
@@ -172,7 +172,7 @@ def main():
     parser.add_argument('launch_args', nargs='*', help='extra roslaunch args (name:=value)')
     args = parser.parse_args()
     if args.seconds is None:
-        args.seconds = 60.0 if args.controller == NAVIGATOR else 30.0
+        args.seconds = 60.0 if args.controller in NAVIGATORS else 30.0
     netenv.apply_loopback_defaults(os.environ)
 
     world = world_mod.load_world(world_mod.resolve_world(args.world, os.path.join(ROOT, 'worlds')))
@@ -180,9 +180,10 @@ def main():
     os.makedirs(os.path.dirname(log_path), exist_ok=True)
     cmd = ['roslaunch', 'closed_loop', 'demo.launch', 'world:=' + args.world, 'robot:=' + args.robot,
            'controller:=' + args.controller] + args.launch_args
-    if args.controller == NAVIGATOR:
+    if args.controller in NAVIGATORS:
         # The navigator's own launch file, with the world's goal (brought into odom) unless one is given.
-        cmd = ['roslaunch', 'closed_loop', 'avoid.launch', 'world:=' + args.world, 'robot:=' + args.robot]
+        cmd = ['roslaunch', 'closed_loop', NAVIGATORS[args.controller], 'world:=' + args.world,
+               'robot:=' + args.robot]
         if world.goal is not None and not any(a.startswith(('goal_x:=', 'goal_y:=')) for a in args.launch_args):
             start = world.robot_start
             dx, dy = world.goal[0] - start.x, world.goal[1] - start.y
@@ -226,7 +227,7 @@ def main():
             with mon.lock:
                 truth, done = mon.truth, (mon.moved and mon.rest_since is not None
                                           and now - mon.rest_since > REST_TO_FINISH_S
-                                          and (args.controller != NAVIGATOR or mon.zone in NAVIGATOR_DONE))
+                                          and (args.controller not in NAVIGATORS or mon.zone in NAVIGATOR_DONE))
                 if now >= next_status and truth is not None:
                     next_status += STATUS_PERIOD_S
                     p = truth.pose.pose.position

@@ -111,6 +111,8 @@ class EpisodeResult:
     peak_decel_mps2: float = 0.0
     wall_s: float = 0.0
     decision_ms: list = dataclasses.field(default_factory=list)
+    #: Other costs the controller measured, {name: [ms, ...]} (the fusion controller's ``fusion_ms``).
+    timings: dict = dataclasses.field(default_factory=dict)
     trajectory: Optional[list] = None
     error: Optional[str] = None
 
@@ -240,6 +242,7 @@ def run_episode(spec, cache=None):
     finally:
         rig.close()
     result.decision_ms = getattr(controller, 'decision_ms', [])
+    result.timings = dict(getattr(controller, 'timings', {}))
     result.wall_s = time.monotonic() - started
     return result
 

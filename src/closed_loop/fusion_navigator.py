@@ -15,6 +15,7 @@ matched to one (``closed_loop.fusion``); each track gets its belief. Then:
 """
 import dataclasses
 import enum
+import time
 
 from closed_loop.fusion import Belief, associate, belief, fresh_detection, in_path
 from closed_loop.navigator import Navigator, NavState
@@ -62,6 +63,8 @@ class FusionNavigator:
         self._last_scan = None
         self._detection = None           # (pixel column or None, frame stamp s, robot pose at the frame)
         self.opinions = ()
+        #: The wall time (ms) of each scan's tracking, association and beliefs, for benchmarks.
+        self.fusion_ms = []
 
     @property
     def goal(self):
@@ -80,6 +83,7 @@ class FusionNavigator:
 
     def update(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         if scan is not self._last_scan:
+            started = time.perf_counter()
             self._last_scan = scan
             tracks = self.tracker.update(scan.stamp_s, clusters(scan, laser_pose, pose, self.tracker.settings))
             red = None
@@ -94,6 +98,7 @@ class FusionNavigator:
                 reach = self.wait_settings.unknown_look_ahead if kind is Belief.UNKNOWN else None
                 opinions.append(Opinion(t, kind, why, in_path(t, pose, half_width, now_s, self.wait_settings, reach)))
             self.opinions = tuple(opinions)
+            self.fusion_ms.append((time.perf_counter() - started) * 1e3)
         blocking = [o for o in self.opinions if o.in_path and o.belief is not Belief.STATIC]
         if self.navigator.state in (NavState.REACHED, NavState.FAILED):
             blocking = []

@@ -7,7 +7,8 @@ from closed_loop.episode import EpisodeError, EpisodeSpec, run_episode
 
 
 def test_every_controller_of_the_package_is_found():
-    assert {'stop_on_obstacle', 'state_machine_controller', 'avoid_obstacles'} <= set(controller_classes())
+    assert {'stop_on_obstacle', 'state_machine_controller', 'avoid_obstacles', 'fusion_controller'} \
+        <= set(controller_classes())
 
 
 def test_stop_on_obstacle_stops_at_the_wall_without_contact():

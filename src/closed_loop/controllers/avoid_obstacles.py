@@ -14,13 +14,20 @@ class AvoidObstacles(Controller):
     extra_settings_classes = (GoalSettings,)
     ends_at_rest = False
 
-    def __init__(self, settings, context, goal_settings=None):
+    def __init__(self, settings, context, *extra_settings):
         Controller.__init__(self, settings, context)
-        self.navigator = Navigator(settings, context.start, context.goal)
+        self.navigator = self.make_core(settings, context, *extra_settings)
         self.scan = None
         self.sent = (0.0, 0.0)
         #: The wall time (ms) of each decision that planned, for benchmarks.
         self.decision_ms = []
+
+    def make_core(self, settings, context, *extra_settings):
+        """What this controller drives: here the navigator (a subclass drives one with its interface)."""
+        return Navigator(settings, context.start, context.goal)
+
+    def after_step(self, now_s, step):
+        """Called with each decision's step (a subclass records more from it)."""
 
     def on_scan(self, now_s, scan, odom):
         try:
@@ -49,4 +56,5 @@ class AvoidObstacles(Controller):
         self.sent = (step.linear_x, step.angular_z)
         self.mode = step.state.name
         self.finished = step.state in (NavState.REACHED, NavState.FAILED)
+        self.after_step(now_s, step)
         return self.sent
