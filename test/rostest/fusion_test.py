@@ -2,8 +2,9 @@
 """fusion.launch in one world, judged on ground truth. Parameters: ~goal_x, ~goal_y (world frame, m): the goal,
 reached (REACHED, ground truth within GOAL_RADIUS_M) with no contact within ~limit_s simulated seconds;
 ~expect_wait: whether the controller must wait (WAITING) or must not; with a wait, ~stop_before_x (m): the
-robot's front stays short of this x while it waits, its ~belief then names a PERSON in the path, and
-~max_detour_m: how far from the line y = 0 the robot may go."""
+robot's front stays short of this x while it waits, its ~belief then names a PERSON in the path, ~tracks
+(watched as rviz would) draws that person as a red cylinder with a velocity arrow, and ~max_detour_m: how
+far from the line y = 0 the robot may go."""
 import json
 import math
 import os
@@ -13,6 +14,7 @@ import unittest
 import rospy
 import rostest
 from std_msgs.msg import String, UInt32
+from visualization_msgs.msg import Marker, MarkerArray
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
@@ -31,6 +33,7 @@ class Fusion(unittest.TestCase):
         mode = harness.Latest('fusion_controller/mode', String, keep_all=True)
         beliefs = harness.Latest('fusion_controller/belief', String, keep_all=True)
         contacts = harness.Latest('contact_count', UInt32)
+        drawn = harness.Latest('fusion_controller/tracks', MarkerArray, keep_all=True)
         start = truth.wait().header.stamp.to_sec()
         waiting_x = []
         while not rospy.is_shutdown():
@@ -55,6 +58,10 @@ class Fusion(unittest.TestCase):
         self.assertTrue(any(b['mode'] == 'WAITING' and any(t['belief'] == 'PERSON' and t['in_path']
                                                           for t in b['tracks']) for b in said), said[-3:])
         self.assertLess(max(abs(m.pose.pose.position.y) for m in truth.all), rospy.get_param('~max_detour_m'))
+        markers = [m for array in drawn.all for m in array.markers]
+        self.assertTrue(any(m.type == Marker.CYLINDER and m.color.r > 0.9 and m.color.g < 0.3 for m in markers),
+                        'no PERSON (red) track drawn on ~tracks')
+        self.assertTrue(any(m.type == Marker.ARROW for m in markers), 'no velocity arrow on ~tracks')
 
 
 if __name__ == '__main__':
