@@ -6,11 +6,14 @@ Usage (inside ``source env.sh``; ``make test`` does that):
 
 Unit tests (test/unit) need no master. System tests (test/system) start real ROS processes outside
 rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces -- and need root.
+Rostest files run one at a time, except the navigation ones (avoid_*, fusion_*, robot_*), which run two at
+a time after the others, each with the master rostest starts on a free port.
 
 Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed``
 (pytest and rostest counted together); the exit status is non-zero if anything failed or nothing ran.
 """
 import argparse
+import concurrent.futures
 import glob
 import os
 import shutil
@@ -85,6 +88,54 @@ def run_launch_checks(args):
     return passed, failed, 0, names
 
 
+#: Rostest files that may run two at a time, each with its own master (rostest starts one on a free port)
+#: and its own ROS_HOME and logs: the navigation tests, judged on simulated time and ground truth. The
+#: others, which measure rates or wall time or start rviz, run one at a time first.
+SIDE_BY_SIDE_PREFIXES = ('avoid_', 'fusion_', 'robot_')
+SIDE_BY_SIDE = 2
+
+
+def run_rostest_file(path, results_dir):
+    """Run one rostest file; returns (passed, failed, skipped, failed names, what to print)."""
+    name = os.path.splitext(os.path.basename(path))[0]
+    log = os.path.join(results_dir, name + '.log')
+    # Each file gets a results folder of its own: rosunit names its files after test-name only.
+    file_results = os.path.join(results_dir, name)
+    env = dict(os.environ, ROS_HOME=os.path.join(OUT, 'ros_home', name), ROS_LOG_DIR=os.path.join(OUT, 'ros_log', name),
+               CLOSED_LOOP_TEST_OUTPUT=os.path.join(OUT, name))
+    os.makedirs(env['CLOSED_LOOP_TEST_OUTPUT'], exist_ok=True)
+    cmd = ['rostest', '--results-base-dir', file_results, 'closed_loop', os.path.basename(path)]
+    started = time.monotonic()
+    with open(log, 'w') as out:
+        try:
+            code = subprocess.call(cmd, stdout=out, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
+                                   timeout=ROSTEST_HANG_LIMIT_S)
+        except subprocess.TimeoutExpired:
+            code = 'timeout'
+    p = f = s = 0
+    names = []
+    # rosunit-<test-name>.xml: one testcase per test method (hztest, our unittest nodes).
+    for xml in sorted(glob.glob(os.path.join(file_results, '**', 'rosunit-*.xml'), recursive=True)):
+        dp, df, ds, dn = count_junit(xml)
+        p, f, s, names = p + dp, f + df, s + ds, names + dn
+    # rostest-<file>.xml: one testcase per <test>; a test node that crashed or hit its time-limit
+    # only shows here.
+    for xml in glob.glob(os.path.join(file_results, '**', 'rostest-*.xml'), recursive=True):
+        _, whole_failed, _, whole_names = count_junit(xml)
+        if whole_failed > f:
+            names += ['%s: %s' % (name, n) for n in whole_names]
+            f = whole_failed
+    if code != 0 and f == 0:
+        f, names = f + 1, names + ['%s (rostest exit %s, see %s)' % (name, code, log)]
+    if p + f == 0:
+        f, names = 1, ['%s (no test ran, see %s)' % (name, log)]
+    text = '== rostest %s ... %d passed, %d failed (%.0f s)' % (name, p, f, time.monotonic() - started)
+    if f:
+        with open(log) as out:
+            text += '\n   --- tail of %s ---\n%s' % (log, out.read()[-3000:])
+    return p, f, s, names, text
+
+
 def run_rostests(args):
     files = sorted(glob.glob(os.path.join(ROOT, 'test', 'rostest', '*.test')))
     if args.k:
@@ -92,49 +143,24 @@ def run_rostests(args):
     totals = [0, 0, 0, []]
     results_dir = os.path.join(OUT, 'rostest')
     os.makedirs(results_dir, exist_ok=True)
-    for path in files:
-        name = os.path.splitext(os.path.basename(path))[0]
-        log = os.path.join(results_dir, name + '.log')
-        # Each file gets a results folder of its own: rosunit names its files after test-name only.
-        file_results = os.path.join(results_dir, name)
-        env = dict(os.environ, ROS_HOME=os.path.join(OUT, 'ros_home'), ROS_LOG_DIR=os.path.join(OUT, 'ros_log', name),
-                   CLOSED_LOOP_TEST_OUTPUT=os.path.join(OUT, name))
-        os.makedirs(env['CLOSED_LOOP_TEST_OUTPUT'], exist_ok=True)
-        cmd = ['rostest', '--results-base-dir', file_results, 'closed_loop', os.path.basename(path)]
-        started = time.monotonic()
-        print('== rostest %s ...' % name, end=' ', flush=True)
-        with open(log, 'w') as out:
-            try:
-                code = subprocess.call(cmd, stdout=out, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
-                                       timeout=ROSTEST_HANG_LIMIT_S)
-            except subprocess.TimeoutExpired:
-                code = 'timeout'
-        p = f = s = 0
-        names = []
-        # rosunit-<test-name>.xml: one testcase per test method (hztest, our unittest nodes).
-        for xml in sorted(glob.glob(os.path.join(file_results, '**', 'rosunit-*.xml'), recursive=True)):
-            dp, df, ds, dn = count_junit(xml)
-            p, f, s, names = p + dp, f + df, s + ds, names + dn
-        # rostest-<file>.xml: one testcase per <test>; a test node that crashed or hit its time-limit
-        # only shows here.
-        for xml in glob.glob(os.path.join(file_results, '**', 'rostest-*.xml'), recursive=True):
-            _, whole_failed, _, whole_names = count_junit(xml)
-            if whole_failed > f:
-                names += ['%s: %s' % (name, n) for n in whole_names]
-                f = whole_failed
-        if code != 0 and f == 0:
-            f, names = f + 1, names + ['%s (rostest exit %s, see %s)' % (name, code, log)]
-        if p + f == 0:
-            f, names = 1, ['%s (no test ran, see %s)' % (name, log)]
-        print('%d passed, %d failed (%.0f s)' % (p, f, time.monotonic() - started), flush=True)
-        if f:
-            with open(log) as text:
-                tail = text.read()[-3000:]
-            print('   --- tail of %s ---\n%s' % (log, tail), flush=True)
+    paired = [f for f in files if os.path.basename(f).startswith(SIDE_BY_SIDE_PREFIXES)]
+    alone = [f for f in files if f not in paired]
+
+    def count(result):
+        p, f, s, names, text = result
+        print(text, flush=True)
         totals[0] += p
         totals[1] += f
         totals[2] += s
         totals[3] += names
+    for path in alone:
+        count(run_rostest_file(path, results_dir))
+    if paired:
+        print('== rostest: %d navigation files, %d at a time' % (len(paired), SIDE_BY_SIDE), flush=True)
+        with concurrent.futures.ThreadPoolExecutor(SIDE_BY_SIDE) as pool:
+            for future in concurrent.futures.as_completed([pool.submit(run_rostest_file, path, results_dir)
+                                                           for path in paired]):
+                count(future.result())
     return tuple(totals)
 
 
