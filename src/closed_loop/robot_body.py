@@ -196,22 +196,27 @@ class Robot:
 
     def contacts_with_obstacles(self):
         """Body uids of the obstacles (and other robots) this robot is in contact with now (not the ground)."""
-        solids = self.obstacle_ids
-        return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] in solids}
+        # Every body but the ground is an obstacle or another robot (called at every physics step: no lookup).
+        ground = self.sim.ground_id
+        return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] != ground}
 
     def clearance(self, max_m):
         """Least distance (m) between this robot's collision shapes and any obstacle or other robot, looked
         for up to ``max_m`` (inf when nothing is that close; 0 or less in contact)."""
-        solids = self.obstacle_ids
         # Only the obstacles that may be that close are asked (those whose footprint's circle comes within
-        # max_m of the circle round this robot's), and every other robot.
+        # max_m of the circle round this robot's), nearest such circle first, until the next circle is
+        # farther than the least distance found; and every other robot.
         fp = self.model.footprint
         radius = math.hypot(max(-fp.x_min, fp.x_max), max(-fp.y_min, fp.y_max))
         x, y = self._call(pybullet.getBasePositionAndOrientation, self.robot_id)[0][:2]
-        near = self.sim.obstacles_near(x, y, max_m + radius)
-        asked = [uid for uid in solids if uid in near or uid not in self.sim.obstacle_uids]
-        found = [c[8] for uid in asked for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)]
-        return min(found, default=float('inf'))
+        least = float('inf')
+        for uid in self.sim.other_robot_ids(self):
+            least = min([least] + [c[8] for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)])
+        for bound, uid in self.sim.obstacles_near(x, y, max_m + radius):
+            if bound - radius > least:
+                break
+            least = min([least] + [c[8] for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)])
+        return least
 
     def within(self, uid, distance_m):
         """True if this robot is within ``distance_m`` of body ``uid``."""

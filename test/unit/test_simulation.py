@@ -522,3 +522,33 @@ def test_world_view_follows_moving_obstacles(make_sim):
         assert obstacle is slider
         assert (x, y) == pytest.approx(moving_obstacle_xy(slider, sim.time_s), abs=1e-6)
         assert z == pytest.approx(slider.position[2])
+
+
+# --- ground-truth clearance -------------------------------------------------------------------------
+
+def brute_force_clearance(sim, max_m):
+    """The least distance to any obstacle, every one asked (what Robot.clearance prunes)."""
+    import pybullet
+    found = [c[8] for uid in sim.obstacle_uids
+             for c in pybullet.getClosestPoints(sim.robot_id, uid, max_m, physicsClientId=sim._client)]
+    return min(found, default=math.inf)
+
+
+@pytest.mark.parametrize('name', ['posts', 'obstacle_course', 'corridor'])
+def test_clearance_asks_only_the_near_obstacles_and_finds_the_same_least(make_sim, name):
+    sim = make_sim(world(name))
+    for seconds, twist in ((0.0, None), (1.0, VelocityCommand(0.4, 0.8)), (1.5, VelocityCommand(0.5, -0.6)),
+                           (2.0, VelocityCommand(0.3, 0.0))):
+        run(sim, seconds, twist)
+        for lookout in (0.3, 1.0, 2.0):
+            assert sim.clearance(lookout) == brute_force_clearance(sim, lookout)
+
+
+def test_clearance_follows_a_moving_obstacle(make_sim):
+    sim = make_sim(slider_world())
+    values = []
+    for _ in range(6):
+        run(sim, 0.3)
+        values.append(sim.clearance(5.0))
+        assert values[-1] == brute_force_clearance(sim, 5.0)
+    assert len(set(values)) > 1
