@@ -43,6 +43,8 @@ def clipped_fields(twist, max_linear_mps, max_angular_rps):
 
 def limit_twist(target, max_linear_mps, max_angular_rps):
     """Clip a commanded twist to the robot's speed limits."""
+    if abs(target.linear_x) <= max_linear_mps and abs(target.angular_z) <= max_angular_rps:
+        return target       # (called at every physics step: no new command when nothing is clipped)
     return VelocityCommand(clamp(target.linear_x, max_linear_mps), clamp(target.angular_z, max_angular_rps))
 
 
@@ -51,6 +53,8 @@ def ramp(current, target, max_linear_accel_mps2, max_angular_accel_rps2, dt_s):
 
     The same limits apply when braking, so a stop is a smooth deceleration, as on a real base.
     """
+    if current == target:
+        return target
     def step(now, goal, rate):
         delta = goal - now
         room = rate * dt_s

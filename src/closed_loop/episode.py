@@ -268,14 +268,16 @@ def _loop(spec, rig, controller, goal_world):
     command, rest_since, ended_s = (0.0, 0.0), None, None
     for k in range(int(round(spec.time_limit_s / dt)) + 1):
         now = sim.time_s
-        odo = sim.odometry
-        odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
-        sent = None
-        if k % steps_per_scan == 0:
+        sent = odom = None
+        scan_due, frame_due = k % steps_per_scan == 0, camera is not None and k % steps_per_frame == frame_phase
+        if scan_due or frame_due or k % steps_per_tick == phase:
+            odo = sim.odometry
+            odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
+        if scan_due:
             scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
                         lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
             sent = controller.on_scan(now, scan, odom)
-        if camera is not None and k % steps_per_frame == frame_phase:
+        if frame_due:
             controller.on_frame(now, camera.sample(sim), camera.intrinsics, odom)
         if k % steps_per_tick == phase:
             sent = controller.on_tick(now, odom)
