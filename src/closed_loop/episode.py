@@ -59,7 +59,9 @@ class EpisodeSpec:
     controller name; ``settings``: its ``~parameters`` over the profile's; ``sim``: the simulator's and its
     sensors' over the profile's; ``scan_noise``: the LIDAR's noise (m, std) and ``seed`` its seed;
     ``goal``: (x, y) in the world frame for a controller that takes one (default: the world's ``goal:``,
-    else its own default); ``time_limit_s``: simulated seconds; ``keep_trajectory``: keep a row per tick."""
+    else its own default); ``time_limit_s``: simulated seconds; ``keep_trajectory``: keep a row per tick;
+    ``end_on_contact``: end the episode at the physics step of its first contact (outcome 'collided',
+    one contact), where a sweep asks only whether there was one."""
     world: object = 'wall'
     robot: str = 'closed_loop'
     controller: str = 'stop_on_obstacle'
@@ -70,6 +72,7 @@ class EpisodeSpec:
     goal: Optional[tuple] = None
     time_limit_s: float = 30.0
     keep_trajectory: bool = False
+    end_on_contact: bool = False
     command_delay_s: float = 0.01
     timer_phase_s: float = 0.05
 
@@ -212,6 +215,9 @@ def prepare(spec, cache=None):
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
                 or value < low:
             raise EpisodeError('%s: expected a number of s, at least %g, got %r' % (name, low, value))
+    for name in ('keep_trajectory', 'end_on_contact'):
+        if not isinstance(getattr(spec, name), bool):
+            raise EpisodeError('%s: expected true or false, got %r' % (name, getattr(spec, name)))
     start = world.robot_start
     goal_world = tuple(spec.goal) if spec.goal is not None else world.goal
     if goal_world is not None and (len(goal_world) != 2 or not all(
@@ -266,7 +272,8 @@ def _loop(spec, rig, controller, goal_world):
     last_xy, last_speed, last_t = pose.position[:2], 0.0, 0.0
     trajectory = [] if spec.keep_trajectory else None
     command, rest_since, ended_s = (0.0, 0.0), None, None
-    for k in range(int(round(spec.time_limit_s / dt)) + 1):
+    last = int(round(spec.time_limit_s / dt))
+    for k in range(last + 1):
         now = sim.time_s
         sent = odom = None
         scan_due, frame_due = k % steps_per_scan == 0, camera is not None and k % steps_per_frame == frame_phase
@@ -306,10 +313,15 @@ def _loop(spec, rig, controller, goal_world):
             _, cmd = pending.pop(0)
             command = (cmd.linear_x, cmd.angular_z)
             sim.command(cmd)
+        if k == last:
+            break           # judged at the time limit, not a step past it
         sim.step()
         now_touching = sim.contacts_with_obstacles()
         contacts += len(now_touching - touching)      # a contact counts once, when it begins
         touching = now_touching
+        if contacts and spec.end_on_contact:
+            ended_s = sim.time_s
+            break
     pose, _ = sim.ground_truth()
     final = (pose.position[0], pose.position[1], quaternion_yaw(pose.orientation))
     error = None if goal_world is None else math.hypot(goal_world[0] - final[0], goal_world[1] - final[1])

@@ -26,7 +26,8 @@ RULE = ('recommended stop_distance: the smallest tried at which every episode at
 
 def build(speeds, stops, worlds, seeds, noises, time_limit_s, name='tune_thresholds'):
     """The sweep: every stop distance x cruise speed x world x noise x seed."""
-    base = {'controller': 'stop_on_obstacle', 'time_limit_s': time_limit_s}
+    # An episode with contact has answered the question: it ends there.
+    base = {'controller': 'stop_on_obstacle', 'time_limit_s': time_limit_s, 'end_on_contact': True}
     grid = {'settings.cruise_speed': speeds, 'settings.stop_distance': stops, 'world': worlds,
             'scan_noise': noises, 'seed': seeds}
     built = sweep_file.build(name, base, grid, {'x': 'settings.stop_distance', 'lines': 'settings.cruise_speed'})

@@ -75,3 +75,16 @@ def test_a_spec_from_a_mapping_refuses_unknown_fields():
         EpisodeSpec.from_dict({'speed': 1.0}, where='row 3')
     assert EpisodeSpec.from_dict(EpisodeSpec(world={'generator': {'seed': 3}}).to_dict()).world == \
         {'generator': {'seed': 3}}
+
+
+def test_an_episode_can_end_at_its_first_contact():
+    # stop_distance 0.1 m: the robot's front is 0.15 m ahead of the LIDAR, so it drives into the wall.
+    crash = dict(world='wall', settings={'stop_distance': 0.1, 'slow_distance': 0.6}, time_limit_s=20.0)
+    whole = run_episode(EpisodeSpec(**crash))
+    ended = run_episode(EpisodeSpec(end_on_contact=True, keep_trajectory=True, **crash))
+    assert whole.outcome == ended.outcome == 'collided' and ended.contacts == 1
+    assert whole.time_s == pytest.approx(20.0)
+    assert 3.0 < ended.time_s < 15.0 and ended.trajectory[-1][0] <= ended.time_s
+    assert 2.8 < ended.final_pose[0] < 3.0      # the wall's face is at x = 3 m; the robot's front is on it
+    with pytest.raises(EpisodeError, match='end_on_contact: expected true or false'):
+        run_episode(EpisodeSpec(end_on_contact='yes'))
