@@ -26,6 +26,11 @@ GRAVITY_MPS2 = 9.81
 SOLVER_ITERATIONS = 20
 
 
+#: pybullet DIRECT clients that closed Simulations left, emptied, for the next ones of this process.
+_IDLE_CLIENTS = []
+MAX_IDLE_CLIENTS = 1
+
+
 @dataclass
 class SimSettings:
     """The simulator node's ``~parameters``; defaults here only."""
@@ -92,7 +97,9 @@ class Simulation:
         self.world = world
         self.settings = settings
         self.dt_s = 1.0 / settings.physics_rate_hz
-        self._client = pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
+        self._client = _IDLE_CLIENTS.pop() if _IDLE_CLIENTS and not settings.gui else \
+            pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
+        self._gui = settings.gui
         if self._client < 0:
             raise RuntimeError('pybullet could not start (gui=%s)' % settings.gui)
         self.time_s = 0.0
@@ -268,5 +275,11 @@ class Simulation:
 
     def close(self):
         if self._client is not None and self._client >= 0:
-            pybullet.disconnect(physicsClientId=self._client)
+            if self._gui or len(_IDLE_CLIENTS) >= MAX_IDLE_CLIENTS:
+                pybullet.disconnect(physicsClientId=self._client)
+            else:
+                # Kept, emptied, for the next Simulation of this process: a batch of short episodes saves
+                # pybullet's connection, about 20 ms each. _build sets everything again after resetSimulation.
+                pybullet.resetSimulation(physicsClientId=self._client)
+                _IDLE_CLIENTS.append(self._client)
             self._client = None

@@ -88,3 +88,18 @@ def test_an_episode_can_end_at_its_first_contact():
     assert 2.8 < ended.final_pose[0] < 3.0      # the wall's face is at x = 3 m; the robot's front is on it
     with pytest.raises(EpisodeError, match='end_on_contact: expected true or false'):
         run_episode(EpisodeSpec(end_on_contact='yes'))
+
+
+def test_a_reused_pybullet_client_gives_the_result_of_a_fresh_one(monkeypatch):
+    from closed_loop import simulation
+    first = run_episode(NOISY)             # whatever client this process had idle
+    assert simulation._IDLE_CLIENTS            # closed, it left its client for the next
+    run_episode(EpisodeSpec(world='posts', controller='state_machine_controller', time_limit_s=3.0))
+    reused = run_episode(NOISY)
+    monkeypatch.setattr(simulation, 'MAX_IDLE_CLIENTS', 0)
+    import pybullet
+    while simulation._IDLE_CLIENTS:
+        pybullet.disconnect(physicsClientId=simulation._IDLE_CLIENTS.pop())
+    fresh = run_episode(NOISY)
+    assert not simulation._IDLE_CLIENTS
+    assert results_equal(first, reused) and results_equal(fresh, reused)
