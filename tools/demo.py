@@ -20,7 +20,8 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import netenv, obstacles, robot_model, shapes, world as world_mod  # noqa: E402
+from closed_loop import netenv, robot_model
+from closed_loop.sim import obstacles, shapes, world as world_mod  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
 
 STATUS_PERIOD_S = 1.0
@@ -139,7 +140,7 @@ def live_robot_model():
     """The robot as the running graph has it: robot_description and the simulator's frame names."""
     import rospy
     from closed_loop.settings import from_params
-    from closed_loop.simulation import SimSettings
+    from closed_loop.sim.simulation import SimSettings
     settings = from_params(SimSettings, lambda name, default: rospy.get_param('/sim/' + name[1:], default))
     return robot_model.load_robot_model(rospy.get_param('/robot_description'), settings.names)
 

@@ -64,8 +64,8 @@ class RobotModel:
 
 def default_urdf_path():
     """The package's default robot description, ``urdf/closed_loop.urdf``."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    return os.path.normpath(os.path.join(here, '..', '..', 'urdf', 'closed_loop.urdf'))
+    from closed_loop.paths import data_path
+    return data_path('urdf', 'closed_loop.urdf')
 
 
 def read_urdf(path):

@@ -1,7 +1,7 @@
 """Reading a YAML input file strictly, and checking its fields, with errors a person can act on.
 
 Every error is a :class:`FileError` (or a subclass a module gives, such as
-:class:`closed_loop.world.WorldError`) whose message names the file, the field and what was
+:class:`closed_loop.sim.world.WorldError`) whose message names the file, the field and what was
 expected, on one line, quoting at most a short excerpt of the offending value:
 ``"worlds/wall.yaml: obstacles[0].size: expected 3 numbers > 0 (m), got [0.1, 4.0]"``.
 Free of ROS; world files use it, and any later input file (a sweep spec) can.

@@ -28,12 +28,13 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import sweep, sweep_file, tune_thresholds  # noqa: E402
-from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
-from closed_loop.profiles import load_profile  # noqa: E402
-from closed_loop.rig import Rig  # noqa: E402
-from closed_loop.sensors.lidar import Lidar  # noqa: E402
-from closed_loop.world import load_world, resolve_world  # noqa: E402
+from closed_loop.batch import sweep, sweep_file
+from closed_loop import tune_thresholds  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
+from closed_loop.sim.profiles import load_profile  # noqa: E402
+from closed_loop.sim.rig import Rig  # noqa: E402
+from closed_loop.sim.sensors.lidar import Lidar  # noqa: E402
+from closed_loop.sim.world import load_world, resolve_world  # noqa: E402
 
 TARGET_OPEN, TARGET_DENSE, TARGET_SCAN_MS = 300.0, 100.0, 0.5
 

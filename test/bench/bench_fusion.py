@@ -7,7 +7,7 @@ Options: ``--variants N`` (default 50), ``--seed S`` (default 0), ``-v`` a line 
 Each variant is person_crossing with, drawn from a seeded generator: the walker's speed (0.5 to 1.5 m/s),
 its crossing angle (60 to 120 degrees to the robot's line), where it starts along its way (its crossing
 point 2.5 to 4.5 m ahead, and 2 to 4 m before that point), and its colour (red in three out of four,
-grey otherwise, so the camera cannot tell). Each runs as an episode (``closed_loop.episode``: the camera on,
+grey otherwise, so the camera cannot tell). Each runs as an episode (``closed_loop.batch.episode``: the camera on,
 the LIDAR at 720 rays), goal (7, 0), 60 s limit. Judged on ground truth:
 
 - contacts (target: none in any run);
@@ -33,8 +33,8 @@ import numpy
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
-from closed_loop.fusion import WaitSettings  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
+from closed_loop.control.fusion import WaitSettings  # noqa: E402
 
 GOAL = (7.0, 0.0)
 TIME_LIMIT_S = 60.0

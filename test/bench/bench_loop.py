@@ -81,12 +81,12 @@ import numpy
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import world as world_mod  # noqa: E402
-from closed_loop.decisions import StopSettings  # noqa: E402
-from closed_loop.scan import ScanError, sector_min  # noqa: E402
-from closed_loop.sensors.lidar import LidarSettings  # noqa: E402
-from closed_loop.sensors.odometry import OdometrySettings  # noqa: E402
-from closed_loop.simulation import SimSettings  # noqa: E402
+from closed_loop.sim import world as world_mod  # noqa: E402
+from closed_loop.control.decisions import StopSettings  # noqa: E402
+from closed_loop.control.scan import ScanError, sector_min  # noqa: E402
+from closed_loop.sim.sensors.lidar import LidarSettings  # noqa: E402
+from closed_loop.sim.sensors.odometry import OdometrySettings  # noqa: E402
+from closed_loop.sim.simulation import SimSettings  # noqa: E402
 
 DEFAULT_PORT = 11396
 WORLD = 'wall'

@@ -4,9 +4,9 @@
 Run: ``python3 test/bench/bench_navigator.py`` inside ``source env.sh`` (``make bench`` does that).
 Options: ``--seeds N`` per fill ratio (default 10), ``--robot NAME`` (default jackal), ``-v`` a line per world.
 
-Worlds: ``closed_loop.clutter`` with fill ratios 0.2, 0.4, 0.6, 0.8 and 1.0 and seeds 0 .. N-1 (its default
+Worlds: ``closed_loop.sim.clutter`` with fill ratios 0.2, 0.4, 0.6, 0.8 and 1.0 and seeds 0 .. N-1 (its default
 geometry: sites 1.1 m apart, narrowest gaps 1.3 robot widths, a corridor the robot fits at any heading).
-Each episode is ``closed_loop.episode.run_episode``: the simulator core and the navigator's core in
+Each episode is ``closed_loop.batch.episode.run_episode``: the simulator core and the navigator's core in
 lockstep in this process, as the node drives it (on its timer, and at once on a scan that makes the command
 being followed unsafe), the profile's parameters (720 rays over 270 degrees at 10 Hz, 0.8 m/s), the
 navigator's defaults otherwise. Success: the navigator said REACHED and ground truth ends within 0.4 m of
@@ -29,10 +29,10 @@ import numpy
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop.clutter import ClutterSettings, generate, narrowest_gap, robot_extent  # noqa: E402
-from closed_loop import navigator as navigator_module  # noqa: E402
-from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
-from closed_loop.profiles import load_profile  # noqa: E402
+from closed_loop.sim.clutter import ClutterSettings, generate, narrowest_gap, robot_extent  # noqa: E402
+from closed_loop.control import navigator as navigator_module  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
+from closed_loop.sim.profiles import load_profile  # noqa: E402
 
 FILL_RATIOS = (0.2, 0.4, 0.6, 0.8, 1.0)
 TIME_LIMIT_S = 80.0

@@ -5,7 +5,7 @@ Run: ``python3 test/bench/bench_sim.py`` inside ``source env.sh`` (``make bench`
 Options: ``--core-only`` skips the ROS part; ``--profile`` adds a cProfile of the core loop with the
 camera off; ``--seconds S`` sets how long each node run is recorded.
 
-1. Core (no ROS): a :class:`closed_loop.simulation.Simulation` driven the way the node's loop drives it
+1. Core (no ROS): a :class:`closed_loop.sim.simulation.Simulation` driven the way the node's loop drives it
    (a physics step and a contact check every step, the robot state at the odometry rate, scans and
    camera frames at their rates, a turn-in-place command at 10 Hz), without sleeping. Prints ms per
    physics step, scan and 320x240 camera frame (median, p95), what each part costs per simulated
@@ -122,17 +122,17 @@ PARTS = ('physics', 'contacts', 'state', 'scan', 'camera')
 
 
 def run_core_loop(rig, sim_seconds, camera):
-    """Drive ``rig`` (a closed_loop.rig.Rig) for ``sim_seconds`` of simulated time as SimNode.run does,
+    """Drive ``rig`` (a closed_loop.sim.rig.Rig) for ``sim_seconds`` of simulated time as SimNode.run does,
     minus ROS and sleeping.
 
     Returns (wall s, CPU s of this process, {part: [s per call]}) for the parts in PARTS.
     """
-    from closed_loop import drive
-    from closed_loop.sensors.camera import Camera
-    from closed_loop.sensors.contacts import Contacts
-    from closed_loop.sensors.lidar import Lidar
-    from closed_loop.sensors.odometry import Odometry
-    from closed_loop.sensors.wheels import WheelEncoders
+    from closed_loop.sim import drive
+    from closed_loop.sim.sensors.camera import Camera
+    from closed_loop.sim.sensors.contacts import Contacts
+    from closed_loop.sim.sensors.lidar import Lidar
+    from closed_loop.sim.sensors.odometry import Odometry
+    from closed_loop.sim.sensors.wheels import WheelEncoders
     sim, s = rig.sim, rig.all_settings
     samples = {part: [] for part in PARTS}
     scan_period, odom_period = 1.0 / s.scan_rate_hz, 1.0 / s.odom_rate_hz
@@ -178,9 +178,9 @@ def default_settings():
     """Every default of the simulator node's settings and its sensors', in one namespace."""
     import dataclasses
     import types
-    from closed_loop.scheduler import SchedulingSettings
-    from closed_loop.sensors import all_sensor_classes
-    from closed_loop.simulation import SimSettings
+    from closed_loop.sim.scheduler import SchedulingSettings
+    from closed_loop.sim.sensors import all_sensor_classes
+    from closed_loop.sim.simulation import SimSettings
     merged = {}
     for cls in (SimSettings, SchedulingSettings) + tuple(c.settings_class for c in all_sensor_classes()
                                                          if c.settings_class is not None):
@@ -190,8 +190,8 @@ def default_settings():
 
 def make_simulation():
     with quiet_stdio():
-        from closed_loop import world
-        from closed_loop.rig import Rig
+        from closed_loop.sim import world
+        from closed_loop.sim.rig import Rig
         loaded = world.load_world(world.resolve_world(WORLD, os.path.join(ROOT, 'worlds')))
         rig = Rig(loaded, {'world': WORLD}, os.path.join(ROOT, 'urdf', 'closed_loop.urdf'))
         for _ in range(CORE_WARMUP_STEPS):
@@ -217,7 +217,7 @@ def core_benchmark(profile):
     if len(on['camera']) == 0 or len(on['scan']) + len(off['scan']) == 0:
         raise BenchError('the core loop rendered no frame or took no scan')
 
-    print('1. Core: closed_loop.simulation without ROS (%g + %g simulated s, as the node loops, no sleep)'
+    print('1. Core: closed_loop.sim.simulation without ROS (%g + %g simulated s, as the node loops, no sleep)'
           % (CORE_CAMERA_ON_SIM_S, CORE_CAMERA_OFF_SIM_S))
     print('   %-34s %10s %10s %8s' % ('per call', 'median ms', 'p95 ms', 'samples'))
     rows = (('physics step (%g Hz)' % s.physics_rate_hz, on['physics'] + off['physics']),

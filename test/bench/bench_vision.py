@@ -15,7 +15,7 @@ import numpy
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'src'))
 
 from closed_loop.image_encoding import array_to_image, image_to_array, to_bgr8  # noqa: E402
-from closed_loop.vision import VisionSettings, detect_red, detect_red_encoded  # noqa: E402
+from closed_loop.control.vision import VisionSettings, detect_red, detect_red_encoded  # noqa: E402
 
 TARGET_MS = 3.0
 SIZES = ((320, 240), (640, 480))

@@ -7,7 +7,7 @@ once the robot is under way, and expect it followed; ~hold_after_x (m, optional)
 robot is ~passed_by_m (3 m) past this x its heading is within 10 degrees of the start heading, judged over
 the next ~hold_window_m (0.5 m) of travel; ~limit_s: simulated seconds allowed; ~episode_world (a world
 name, optional): run the same scenario (world, ~episode_robot, goal, the navigator's parameters as the graph
-has them, limit) through the episode runner (closed_loop.episode) too, and require the same outcome."""
+has them, limit) through the episode runner (closed_loop.batch.episode) too, and require the same outcome."""
 import math
 import os
 import sys
@@ -20,9 +20,9 @@ from std_msgs.msg import String, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
-from closed_loop.navigator import GoalSettings, NavigatorSettings, NavState  # noqa: E402
+from closed_loop.control.navigator import GoalSettings, NavigatorSettings, NavState  # noqa: E402
 
 HOLD_TOLERANCE_RAD = math.radians(10.0)
 PASSED_BY_M = 3.0

@@ -24,10 +24,10 @@ from std_msgs.msg import Bool, Float32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.decisions import StopSettings  # noqa: E402
+from closed_loop.control.decisions import StopSettings  # noqa: E402
 from closed_loop.nodes.common import LOG_PERIOD_S  # noqa: E402
-from closed_loop.sensors.lidar import LidarSettings  # noqa: E402
-from closed_loop.vision import VisionSettings  # noqa: E402
+from closed_loop.sim.sensors.lidar import LidarSettings  # noqa: E402
+from closed_loop.control.vision import VisionSettings  # noqa: E402
 
 NODES = ('/stop_on_obstacle', '/obstacle_detector', '/vision_node')
 

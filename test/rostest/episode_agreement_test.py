@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The real graph against the episode runner (closed_loop.episode) in `wall`: for each of ~speeds, the graph's
+"""The real graph against the episode runner (closed_loop.batch.episode) in `wall`: for each of ~speeds, the graph's
 stop_on_obstacle is set to cruise at that speed with no slow zone (slow_speed = cruise_speed) and a stop
 distance of STOP_M, room to brake from 1 m/s (through dynamic_reconfigure), the world is reset, and once the robot has been at rest for REST_FOR_S its ground-truth
 x must be within AGREE_M of the episode's of the same settings. Both are judged on ground truth."""
@@ -15,7 +15,7 @@ from std_srvs.srv import Empty
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.episode import EpisodeSpec, run_episode  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 
 AGREE_M = 0.03
 STOP_M, SLOW_M = 0.8, 1.2

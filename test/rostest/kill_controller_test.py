@@ -14,8 +14,8 @@ import rostest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.decisions import StopSettings  # noqa: E402
-from closed_loop.simulation import SimSettings  # noqa: E402
+from closed_loop.control.decisions import StopSettings  # noqa: E402
+from closed_loop.sim.simulation import SimSettings  # noqa: E402
 
 CMD_VEL_TIMEOUT_S = SimSettings().cmd_vel_timeout   # sim_node's defaults, from their one source
 MAX_LINEAR_ACCEL_MPS2 = SimSettings().max_linear_accel

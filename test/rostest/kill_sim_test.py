@@ -16,7 +16,7 @@ from sensor_msgs.msg import LaserScan
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.decisions import StopSettings  # noqa: E402
+from closed_loop.control.decisions import StopSettings  # noqa: E402
 
 SCAN_TIMEOUT_S = StopSettings().scan_timeout   # stop_on_obstacle's defaults, from their one source
 PERIOD_S = StopSettings().watchdog_period_s

@@ -14,7 +14,7 @@ from std_msgs.msg import Bool, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.decisions import StopSettings  # noqa: E402
+from closed_loop.control.decisions import StopSettings  # noqa: E402
 
 WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/closed_loop.urdf)
 SLOW_DISTANCE_M = StopSettings().slow_distance   # stop_on_obstacle's defaults, from their one source

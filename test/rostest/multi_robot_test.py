@@ -18,8 +18,8 @@ from std_msgs.msg import String, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.decisions import StopSettings, Zone  # noqa: E402
-from closed_loop.world import load_world  # noqa: E402
+from closed_loop.control.decisions import StopSettings, Zone  # noqa: E402
+from closed_loop.sim.world import load_world  # noqa: E402
 
 ROBOTS = ('r1', 'r2')
 BODY_LENGTH_M = 0.30        # urdf/closed_loop.urdf: the body is 0.30 m long, the LIDAR at its centre

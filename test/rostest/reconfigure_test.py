@@ -16,8 +16,8 @@ from std_msgs.msg import UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.decisions import StopSettings  # noqa: E402
-from closed_loop.scan import DetectorSettings  # noqa: E402
+from closed_loop.control.decisions import StopSettings  # noqa: E402
+from closed_loop.control.scan import DetectorSettings  # noqa: E402
 
 WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/closed_loop.urdf)
 NEW_STOP_DISTANCE_M = 0.8

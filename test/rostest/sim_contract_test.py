@@ -19,8 +19,8 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.simulation import SimSettings  # noqa: E402
-from closed_loop.world import load_world  # noqa: E402
+from closed_loop.sim.simulation import SimSettings  # noqa: E402
+from closed_loop.sim.world import load_world  # noqa: E402
 
 WALL_NEAR_FACE_X_M = 3.0        # worlds/wall.yaml
 WALL_HALF_SPAN_Y_M = 2.0

@@ -11,7 +11,7 @@ from std_msgs.msg import String, UInt32
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.state_machine import BackUpSettings, State  # noqa: E402
+from closed_loop.control.state_machine import BackUpSettings, State  # noqa: E402
 
 BACKUP_S = BackUpSettings().backup_duration   # state_machine_controller's defaults (the lesson's)
 BACKUP_SPEED_MPS = BackUpSettings().backup_speed

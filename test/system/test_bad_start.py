@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-from closed_loop import world as world_mod
+from closed_loop.sim import world as world_mod
 
 # Hang guard only: each of these is refused in about a second.
 RUN_LIMIT_S = 60.0

@@ -11,8 +11,8 @@ import pytest
 
 from conftest import ROOT, free_port
 
-from closed_loop import sweep, sweep_file, tune_thresholds
-from closed_loop.episode import EpisodeSpec
+from closed_loop.batch import sweep, sweep_file, tune_thresholds
+from closed_loop.batch.episode import EpisodeSpec
 
 TINY = """name: tiny
 base: {world: wall, controller: stop_on_obstacle, time_limit_s: 15}
@@ -112,7 +112,7 @@ def test_an_interrupted_sweep_keeps_its_rows_and_resumes_where_it_stopped(tmp_pa
     spec.write_text(TINY.replace('seed: [0, 1]', 'seed: [0, 1, 2, 3, 4, 5]'))
     out = tmp_path / 'out'
     env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, 'src') + os.pathsep + os.environ.get('PYTHONPATH', ''))
-    p = subprocess.Popen([sys.executable, '-m', 'closed_loop.sweep', str(spec), '--output', str(out),
+    p = subprocess.Popen([sys.executable, '-m', 'closed_loop.batch.sweep', str(spec), '--output', str(out),
                           '--workers', '2'], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + HANG_S
     while time.monotonic() < deadline and (not (out / 'rows.csv').exists() or len(rows_of(out / 'rows.csv')) < 3):

@@ -8,13 +8,13 @@ if SRC not in sys.path:
 
 
 class SimWithSensors:
-    """A :class:`closed_loop.rig.Rig` read the way these tests read it: ``scan()``, ``render_camera()``,
+    """A :class:`closed_loop.sim.rig.Rig` read the way these tests read it: ``scan()``, ``render_camera()``,
     ``new_contacts()`` and the simulation's own attributes; ``settings`` holds every settings field."""
 
     def __init__(self, rig):
-        from closed_loop.sensors.camera import Camera
-        from closed_loop.sensors.contacts import Contacts
-        from closed_loop.sensors.lidar import Lidar
+        from closed_loop.sim.sensors.camera import Camera
+        from closed_loop.sim.sensors.contacts import Contacts
+        from closed_loop.sim.sensors.lidar import Lidar
         self.rig = rig
         self._lidar, self._camera, self._contacts = Lidar, Camera, Contacts
         self.settings = rig.all_settings

@@ -88,8 +88,8 @@ def core_modules():
 
 def test_discovery_finds_the_core_and_skips_the_ros_layer():
     modules = core_modules()
-    for expected in ('closed_loop', 'closed_loop.drive', 'closed_loop.settings',
-                     'closed_loop.simulation', 'closed_loop.world'):
+    for expected in ('closed_loop', 'closed_loop.sim.drive', 'closed_loop.settings',
+                     'closed_loop.sim.simulation', 'closed_loop.sim.world'):
         assert expected in modules
     assert not any(m.startswith('closed_loop.%s' % ROS_LAYER) for m in modules)
 

@@ -5,9 +5,9 @@ import time
 
 import pytest
 
-from closed_loop.decisions import (Decision, DecisionError, SilenceWatchdog, StopSettings, Zone,
+from closed_loop.control.decisions import (Decision, DecisionError, SilenceWatchdog, StopSettings, Zone,
                                    classify_zone, decide, input_problem, speed_for_zone, stop)
-from closed_loop.scan import SectorReading
+from closed_loop.control.scan import SectorReading
 from closed_loop.settings import SettingsError, check, from_params
 
 SETTINGS = check(StopSettings())
@@ -254,8 +254,8 @@ def test_watchdog_rejects_bad_times(timeout, period, field):
 
 
 def test_react_now_first_decision_and_new_danger_only():
-    from closed_loop.decisions import react_now
-    from closed_loop.scan import SectorReading
+    from closed_loop.control.decisions import react_now
+    from closed_loop.control.scan import SectorReading
     from closed_loop.settings import check
     settings = check(StopSettings())
     near, far = SectorReading(0.3, 10, 10), SectorReading(2.0, 10, 10)

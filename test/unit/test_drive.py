@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from closed_loop.drive import (STOP, VelocityCommand, CommandError, CommandWatchdog, Odometry2D,
+from closed_loop.sim.drive import (STOP, VelocityCommand, CommandError, CommandWatchdog, Odometry2D,
                                body_twist, limit_twist, ramp, validate_twist, wheel_speeds)
 
 # The robot's wheel geometry (urdf/closed_loop.urdf); any positive values would do for the algebra.

@@ -3,7 +3,7 @@ import distributed
 import pytest
 
 from closed_loop.controllers import controller_classes
-from closed_loop.episode import EpisodeError, EpisodeSpec, run_episode
+from closed_loop.batch.episode import EpisodeError, EpisodeSpec, run_episode
 
 
 def test_every_controller_of_the_package_is_found():
@@ -91,7 +91,7 @@ def test_an_episode_can_end_at_its_first_contact():
 
 
 def test_a_reused_pybullet_client_gives_the_result_of_a_fresh_one(monkeypatch):
-    from closed_loop import simulation
+    from closed_loop.sim import simulation
     first = run_episode(NOISY)             # whatever client this process had idle
     assert simulation._IDLE_CLIENTS            # closed, it left its client for the next
     run_episode(EpisodeSpec(world='posts', controller='state_machine_controller', time_limit_s=3.0))

@@ -1,19 +1,19 @@
-"""The camera's bearing, its association with LIDAR tracks, and the belief rule (closed_loop.fusion)."""
+"""The camera's bearing, its association with LIDAR tracks, and the belief rule (closed_loop.control.fusion)."""
 import math
 
 import cv2
 import pytest
 
-from closed_loop.fusion import Belief, CameraModel, FusionSettings, associate, belief, fresh_detection
-from closed_loop.profiles import load_profile
-from closed_loop.rig import Rig
+from closed_loop.control.fusion import Belief, CameraModel, FusionSettings, associate, belief, fresh_detection
+from closed_loop.sim.profiles import load_profile
+from closed_loop.sim.rig import Rig
 from closed_loop.robot_model import Pose2DInBase
-from closed_loop.scan import Scan
-from closed_loop.sensors.camera import Camera, camera_intrinsics
-from closed_loop.sensors.lidar import Lidar
-from closed_loop.tracking import Track, Tracker, TrackerSettings, clusters
-from closed_loop.vision import VisionSettings, detect_red
-from closed_loop.world import parse_world
+from closed_loop.control.scan import Scan
+from closed_loop.sim.sensors.camera import Camera, camera_intrinsics
+from closed_loop.sim.sensors.lidar import Lidar
+from closed_loop.control.tracking import Track, Tracker, TrackerSettings, clusters
+from closed_loop.control.vision import VisionSettings, detect_red
+from closed_loop.sim.world import parse_world
 
 F = FusionSettings()
 INTRINSICS = camera_intrinsics(320, 240, 1.085)

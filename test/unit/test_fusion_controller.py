@@ -1,9 +1,9 @@
-"""The fusion controller's core in episodes (closed_loop.fusion_navigator through closed_loop.episode): it
+"""The fusion controller's core in episodes (closed_loop.control.fusion_navigator through closed_loop.batch.episode): it
 waits for a walker and goes round what is static, judged on ground truth."""
 import pytest
 
 from closed_loop.controllers import controller_class
-from closed_loop.episode import EpisodeSpec, prepare, run_episode
+from closed_loop.batch.episode import EpisodeSpec, prepare, run_episode
 
 WALKER_PATH_X = 3.0           # worlds/person_crossing.yaml: the walker's line, its radius 0.25 m
 FRONT_M = 0.15                # the package's robot: base_footprint to the front of the footprint

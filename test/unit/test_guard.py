@@ -4,8 +4,9 @@ import math
 import numpy
 import pytest
 
-from closed_loop import guard, robot_model
-from closed_loop.scan import Scan
+from closed_loop.control import guard
+from closed_loop import robot_model
+from closed_loop.control.scan import Scan
 from closed_loop.settings import SettingsError, check
 
 URDF = open(robot_model.default_urdf_path()).read()

@@ -4,7 +4,9 @@ import math
 import numpy
 import pytest
 
-from closed_loop import decisions, drive, robot_model, vision, world, yaml_check
+from closed_loop.control import decisions, vision
+from closed_loop.sim import drive, world
+from closed_loop import robot_model, yaml_check
 from closed_loop.settings import MIN_RATE_HZ, SettingsError, check
 
 

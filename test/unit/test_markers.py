@@ -1,9 +1,9 @@
-"""The velocity marker's geometry and colours (closed_loop.markers), without ROS."""
+"""The velocity marker's geometry and colours (closed_loop.control.markers), without ROS."""
 import math
 
 import pytest
 
-from closed_loop import markers
+from closed_loop.control import markers
 
 
 def test_straight_arrow_length_is_speed_times_horizon():

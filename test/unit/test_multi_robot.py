@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from closed_loop import robot_model
-from closed_loop.drive import VelocityCommand
-from closed_loop.sensors.contacts import Contacts
-from closed_loop.sensors.lidar import Lidar, LidarSettings
-from closed_loop.simulation import RobotSetup, SimSettings, Simulation
-from closed_loop.world import WorldError, parse_world
+from closed_loop.sim.drive import VelocityCommand
+from closed_loop.sim.sensors.contacts import Contacts
+from closed_loop.sim.sensors.lidar import Lidar, LidarSettings
+from closed_loop.sim.simulation import RobotSetup, SimSettings, Simulation
+from closed_loop.sim.world import WorldError, parse_world
 
 
 def two_robots(**r2):

@@ -6,13 +6,13 @@ import cv2
 import numpy
 import pytest
 
-from closed_loop import wavefront
-from closed_loop.clearance_field import CHAMFER_ERROR, edge_clearance, outline
-from closed_loop.guard import scan_points
-from closed_loop.local_planner import NavigatorError, plan, predict
-from closed_loop.navigator import NavigatorSettings
+from closed_loop.control import wavefront
+from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, outline
+from closed_loop.control.guard import scan_points
+from closed_loop.control.local_planner import NavigatorError, plan, predict
+from closed_loop.control.navigator import NavigatorSettings
 from closed_loop.robot_model import Footprint, Pose2DInBase
-from closed_loop.scan import Scan
+from closed_loop.control.scan import Scan
 
 FOOTPRINT = Footprint(-0.15, 0.15, -0.14, 0.14)      # the package's robot (urdf/closed_loop.urdf)
 JACKAL = Footprint(-0.254, 0.254, -0.2155, 0.2155)
@@ -144,7 +144,7 @@ def test_a_decision_at_720_rays_in_clutter_is_cheap():
 
 # --- the states, on injected time ----------------------------------------------------------------------------
 
-from closed_loop.navigator import Navigator, NavState  # noqa: E402
+from closed_loop.control.navigator import Navigator, NavState  # noqa: E402
 
 
 def test_reaching_the_goal_gives_zero_for_good():
@@ -257,7 +257,7 @@ def test_a_new_goal_starts_over():
 
 
 def test_backing_up_needs_a_scan_that_sees_behind():
-    from closed_loop.navigator import rear_seen
+    from closed_loop.control.navigator import rear_seen
     full = scan_of()
     assert rear_seen(full, LASER)
     front_only = Scan(0.0, 'front_laser', -2.356, 2.356, 4.712 / 719, 0.0, 0.1, 0.1, 30.0, numpy.full(720, numpy.inf))

@@ -25,7 +25,7 @@ def test_every_python_package_is_in_setup_py():
     for folder, _dirs, files in os.walk(os.path.join(ROOT, 'src')):
         if '__init__.py' in files:
             packages.add(os.path.relpath(folder, os.path.join(ROOT, 'src')).replace(os.sep, '.'))
-    listed = set(re.findall(r"'(closed_loop[\w.]*)'", re.search(r'packages=\[(.*?)\]', read('setup.py')).group(1)))
+    listed = set(re.findall(r"'(closed_loop[\w.]*)'", re.search(r'packages=\[(.*?)\]', read('setup.py'), re.S).group(1)))
     assert listed == packages, 'setup.py packages= must list %s' % sorted(packages)
 
 

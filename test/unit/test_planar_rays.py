@@ -5,14 +5,14 @@ import os
 import numpy
 import pytest
 
-from closed_loop import shapes
+from closed_loop.sim import shapes
 from closed_loop.commands import validate_command
-from closed_loop.planar_rays import PlanarRays
-from closed_loop.rig import Rig
-from closed_loop.sensors.lidar import Lidar, LidarSettings
+from closed_loop.sim.planar_rays import PlanarRays
+from closed_loop.sim.rig import Rig
+from closed_loop.sim.sensors.lidar import Lidar, LidarSettings
 from closed_loop.settings import SettingsError
-from closed_loop.simulation import RobotSetup, SimSettings, Simulation
-from closed_loop.world import load_world, parse_world
+from closed_loop.sim.simulation import RobotSetup, SimSettings, Simulation
+from closed_loop.sim.world import load_world, parse_world
 
 WORLDS = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..', 'worlds')
 

@@ -8,13 +8,13 @@ import pytest
 import yaml
 
 from closed_loop import robot_model
-from closed_loop.scan import DetectorSettings, Scan, sector_readings
+from closed_loop.control.scan import DetectorSettings, Scan, sector_readings
 from closed_loop.settings import check
-from closed_loop.rig import Rig
-from closed_loop.simulation import SimSettings
+from closed_loop.sim.rig import Rig
+from closed_loop.sim.simulation import SimSettings
 from conftest import SimWithSensors
-from closed_loop.obstacles import footprint_overlaps
-from closed_loop.world import Pose2D, load_world, parse_world
+from closed_loop.sim.obstacles import footprint_overlaps
+from closed_loop.sim.world import Pose2D, load_world, parse_world
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
 PROFILES = ('closed_loop', 'burger', 'jackal')
@@ -56,7 +56,7 @@ def test_footprints_are_the_published_sizes(name, length, width):
 def test_each_robot_drives_straight_and_turns_in_the_core(name):
     sim = rig(name)
     try:
-        from closed_loop.drive import VelocityCommand
+        from closed_loop.sim.drive import VelocityCommand
         speed = min(0.2, sim.settings.max_linear_speed)
         for i in range(int(2.0 / sim.dt_s)):
             if i % 10 == 0:

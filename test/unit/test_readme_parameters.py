@@ -7,8 +7,10 @@ import re
 
 import pytest
 
-from closed_loop import commands, decisions, guard, markers, scan, scheduler, simulation, state_machine, vision
-from closed_loop.sensors import all_sensor_classes
+from closed_loop import commands
+from closed_loop.control import decisions, guard, markers, scan, state_machine, vision
+from closed_loop.sim import scheduler, simulation
+from closed_loop.sim.sensors import all_sensor_classes
 
 README = os.path.join(os.path.dirname(__file__), '..', '..', 'README.md')
 TABLE_HEADER = '| parameter | unit | default | meaning |'

@@ -3,12 +3,12 @@ import math
 
 import pytest
 
-from closed_loop.decisions import StopSettings
-from closed_loop.guard import GuardSettings
+from closed_loop.control.decisions import StopSettings
+from closed_loop.control.guard import GuardSettings
 from closed_loop.reconfigure import LEVEL, changed, config_type, differences, live_values
-from closed_loop.scan import DetectorSettings
+from closed_loop.control.scan import DetectorSettings
 from closed_loop.settings import SettingsError, live_fields
-from closed_loop.state_machine import BackUpSettings, BackUpStateMachine, State
+from closed_loop.control.state_machine import BackUpSettings, BackUpStateMachine, State
 
 # What must be tunable live, per node (the list: thresholds, speeds, sector width, margins).
 EXPECTED_LIVE = {

@@ -4,7 +4,7 @@ import math
 import numpy
 import pytest
 
-from closed_loop.scan import (DetectorSettings, Scan, ScanError, SectorReading, nearest,
+from closed_loop.control.scan import (DetectorSettings, Scan, ScanError, SectorReading, nearest,
                               sample_angles, sector_min, sector_readings, usable_ranges,
                               validate_scan)
 from closed_loop.settings import SettingsError, check

@@ -2,7 +2,7 @@
 every step, no slip through rounding."""
 import pytest
 
-from closed_loop.scheduler import Schedule
+from closed_loop.sim.scheduler import Schedule
 
 STEP_S = 0.01
 

@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 
 from closed_loop import robot_model
-from closed_loop.drive import STOP, VelocityCommand
+from closed_loop.sim.drive import STOP, VelocityCommand
 from closed_loop.settings import SettingsError, check
-from closed_loop.rig import Rig
-from closed_loop.sensors.camera import CameraSettings, camera_intrinsics
-from closed_loop.sensors.lidar import LidarSettings, scan_layout
-from closed_loop.simulation import SimSettings
+from closed_loop.sim.rig import Rig
+from closed_loop.sim.sensors.camera import CameraSettings, camera_intrinsics
+from closed_loop.sim.sensors.lidar import LidarSettings, scan_layout
+from closed_loop.sim.simulation import SimSettings
 from conftest import SimWithSensors
-from closed_loop.obstacles import moving_obstacle_xy
-from closed_loop.world import load_world, parse_world
+from closed_loop.sim.obstacles import moving_obstacle_xy
+from closed_loop.sim.world import load_world, parse_world
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
 DEG = math.pi / 180.0
@@ -495,7 +495,7 @@ def test_robot_model_reads_its_dimensions_from_the_urdf():
 # --- the world view (world_markers) -----------------------------------------------------------------
 
 def test_world_view_sends_a_static_world_once_and_again_after_a_reset(make_sim):
-    from closed_loop.sensors.world_state import WorldState
+    from closed_loop.sim.sensors.world_state import WorldState
     sim = make_sim(world('corridor'))
     view = sim.rig.sensors[WorldState]
     first = view.sample(sim.rig.sim)
@@ -510,7 +510,7 @@ def test_world_view_sends_a_static_world_once_and_again_after_a_reset(make_sim):
 
 
 def test_world_view_follows_moving_obstacles(make_sim):
-    from closed_loop.sensors.world_state import WorldState
+    from closed_loop.sim.sensors.world_state import WorldState
     sim = make_sim(slider_world())
     view = sim.rig.sensors[WorldState]
     slider = sim.world.obstacles[0]

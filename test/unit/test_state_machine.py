@@ -4,7 +4,7 @@ import math
 import pytest
 
 from closed_loop.settings import SettingsError, check
-from closed_loop.state_machine import (BackUpSettings, BackUpStateMachine, State,
+from closed_loop.control.state_machine import (BackUpSettings, BackUpStateMachine, State,
                                        StateMachineError)
 
 SETTINGS = check(BackUpSettings())
@@ -119,9 +119,9 @@ def test_single_field_limits(field, value):
 
 
 def test_react_now_only_for_a_trusted_obstacle_while_exploring():
-    from closed_loop.scan import SectorReading
+    from closed_loop.control.scan import SectorReading
     from closed_loop.settings import check
-    from closed_loop.state_machine import BackUpSettings, State, react_now
+    from closed_loop.control.state_machine import BackUpSettings, State, react_now
     settings = check(BackUpSettings())
     near, far, invalid = SectorReading(0.3, 5, 5), SectorReading(1.0, 5, 5), SectorReading(float('nan'), 0, 5)
     assert react_now(State.EXPLORING, near, settings)

@@ -1,10 +1,10 @@
-"""Clusters of scan points in odom and tracks over time (closed_loop.tracking), on synthetic scans."""
+"""Clusters of scan points in odom and tracks over time (closed_loop.control.tracking), on synthetic scans."""
 import math
 
 import pytest
 
 from closed_loop.robot_model import Pose2DInBase
-from closed_loop.tracking import Tracker, TrackerSettings, clusters
+from closed_loop.control.tracking import Tracker, TrackerSettings, clusters
 from test_navigator import scan_of
 
 LASER = Pose2DInBase(0.0, 0.0, 0.0)

@@ -10,7 +10,7 @@ import pytest
 
 from closed_loop.image_encoding import array_to_image, image_to_array, to_bgr8
 from closed_loop.settings import SettingsError, check, from_params
-from closed_loop.vision import (RedDetection, VisionError, VisionSettings, detect_red,
+from closed_loop.control.vision import (RedDetection, VisionError, VisionSettings, detect_red,
                                 detect_red_encoded, red_mask)
 
 HEIGHT, WIDTH = 60, 80
@@ -213,7 +213,7 @@ def test_core_modules_import_without_ros():
     code = ('import sys\n'
             'for name in %r:\n'
             '    sys.modules[name] = None\n'
-            'import closed_loop.image_encoding, closed_loop.vision\n' % (blocked,))
+            'import closed_loop.image_encoding, closed_loop.control.vision\n' % (blocked,))
     src = os.path.join(os.path.dirname(__file__), '..', '..', 'src')
     env = dict(os.environ, PYTHONPATH=os.path.abspath(src))
     run = subprocess.run([sys.executable, '-c', code], env=env, capture_output=True, text=True)

@@ -5,9 +5,9 @@ import textwrap
 
 import pytest
 
-from closed_loop.obstacles import disk_overlaps, motion_path, moving_obstacle_xy
-from closed_loop.world_robots import ROBOT_CLEARANCE_RADIUS_M
-from closed_loop.world import (NAMED_COLORS, Obstacle, Pose2D,
+from closed_loop.sim.obstacles import disk_overlaps, motion_path, moving_obstacle_xy
+from closed_loop.sim.world_robots import ROBOT_CLEARANCE_RADIUS_M
+from closed_loop.sim.world import (NAMED_COLORS, Obstacle, Pose2D,
                                WorldError, available_worlds, load_world, parse_world, resolve_world)
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))

@@ -1,5 +1,5 @@
 """Each controller's core as its node drives it, on plain values, for the episode runner
-(``closed_loop.episode``), which steps it in lockstep with the simulation.
+(``closed_loop.batch.episode``), which steps it in lockstep with the simulation.
 
 A :class:`Controller` does what its node in ``closed_loop.nodes`` does: :meth:`Controller.on_scan` on each
 scan (a command when the node would act at once, on new danger; None when it waits for its timer) and
@@ -46,7 +46,7 @@ class Controller:
         self.finished = False
 
     def on_scan(self, now_s, scan, odom):
-        """A scan (``closed_loop.scan.Scan``) arrives at ``now_s``: the command to send at once, or None."""
+        """A scan (``closed_loop.control.scan.Scan``) arrives at ``now_s``: the command to send at once, or None."""
         return None
 
     def on_tick(self, now_s, odom):

@@ -2,10 +2,10 @@
 import time
 
 from closed_loop.controllers import Controller
-from closed_loop.guard import scan_points
-from closed_loop.local_planner import NavigatorError
-from closed_loop.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger, stale_input
-from closed_loop.scan import ScanError, validate_scan
+from closed_loop.control.guard import scan_points
+from closed_loop.control.local_planner import NavigatorError
+from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger, stale_input
+from closed_loop.control.scan import ScanError, validate_scan
 
 
 class AvoidObstacles(Controller):

@@ -1,7 +1,7 @@
 """What stop_on_obstacle and state_machine_controller share (``closed_loop.nodes.front_controller``): the
 front sector's reading of each scan, its age, and the decision path from the scan and from the timer."""
 from closed_loop.controllers import Controller
-from closed_loop.scan import ScanError, sector_min
+from closed_loop.control.scan import ScanError, sector_min
 
 
 class FrontController(Controller):

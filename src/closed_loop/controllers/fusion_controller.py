@@ -1,13 +1,13 @@
-"""fusion_controller's core (``closed_loop.fusion_navigator``), as its node drives it: avoid_obstacles'
+"""fusion_controller's core (``closed_loop.control.fusion_navigator``), as its node drives it: avoid_obstacles'
 timer and danger check, and the camera's red detection on each frame."""
 import cv2
 
 from closed_loop.controllers.avoid_obstacles import AvoidObstacles
-from closed_loop.fusion import CameraModel, FusionSettings, WaitSettings
-from closed_loop.fusion_navigator import FusionNavigator
-from closed_loop.navigator import GoalSettings
-from closed_loop.tracking import TrackerSettings
-from closed_loop.vision import VisionSettings, detect_red
+from closed_loop.control.fusion import CameraModel, FusionSettings, WaitSettings
+from closed_loop.control.fusion_navigator import FusionNavigator
+from closed_loop.control.navigator import GoalSettings
+from closed_loop.control.tracking import TrackerSettings
+from closed_loop.control.vision import VisionSettings, detect_red
 
 
 class FusionController(AvoidObstacles):

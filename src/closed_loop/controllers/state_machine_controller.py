@@ -1,7 +1,7 @@
 """state_machine_controller's core, as ``closed_loop.nodes.state_machine_controller`` drives it."""
-from closed_loop import state_machine
+from closed_loop.control import state_machine
 from closed_loop.controllers.front import FrontController
-from closed_loop.decisions import input_problem
+from closed_loop.control.decisions import input_problem
 
 
 class StateMachineController(FrontController):

@@ -1,5 +1,5 @@
 """stop_on_obstacle's core, as ``closed_loop.nodes.stop_on_obstacle`` drives it."""
-from closed_loop import decisions
+from closed_loop.control import decisions
 from closed_loop.controllers.front import FrontController
 
 

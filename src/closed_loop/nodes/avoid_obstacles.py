@@ -1,4 +1,4 @@
-"""avoid_obstacles: the reactive navigator (logic in closed_loop.navigator) behind the usual topics."""
+"""avoid_obstacles: the reactive navigator (logic in closed_loop.control.navigator) behind the usual topics."""
 import math
 import threading
 import time
@@ -12,15 +12,15 @@ from std_msgs.msg import ColorRGBA, String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from closed_loop import robot_model
-from closed_loop.decisions import SilenceWatchdog
+from closed_loop.control.decisions import SilenceWatchdog
 from closed_loop.geometry import quaternion_yaw
-from closed_loop.guard import scan_points
-from closed_loop.local_planner import NavigatorError
-from closed_loop.navigator import GoalSettings, Navigator, NavigatorSettings, in_danger, stale_input
+from closed_loop.control.guard import scan_points
+from closed_loop.control.local_planner import NavigatorError
+from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, in_danger, stale_input
 from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, StopsOnShutdown, frame_id, init_node,
                                       load_settings, robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
-from closed_loop.scan import ScanError, validate_scan
+from closed_loop.control.scan import ScanError, validate_scan
 from closed_loop.sources import SourceCheck
 
 
@@ -36,7 +36,7 @@ class AvoidObstacles(StopsOnShutdown):
     """Goes to a goal around obstacles, with the robot's footprint, or holds its start heading.
 
     The scan and odometry callbacks store; a timer on the ROS clock decides through
-    :class:`closed_loop.navigator.Navigator` and publishes. A scan that makes the command being followed
+    :class:`closed_loop.control.navigator.Navigator` and publishes. A scan that makes the command being followed
     unsafe (its predicted path now comes within ``~safety_margin``) is acted on at once. A missing or
     stale scan or odometry (older than ``~scan_timeout``), a scan from a second publisher or in another
     frame than ``~scan_frame``, or no scan for ``~scan_timeout`` s of wall time (a dead simulator) means
@@ -46,11 +46,11 @@ class AvoidObstacles(StopsOnShutdown):
     speeds), ``move_base_simple/goal`` (geometry_msgs/PoseStamped, as rviz's "2D Nav Goal" sends it; any
     frame TF can bring into odom).
     Publications: ``cmd_vel`` (geometry_msgs/Twist; zero on shutdown), ``~mode`` (std_msgs/String,
-    latched: GOAL_SEEKING, AVOIDING, RECOVERING, REACHED or FAILED, ``closed_loop.navigator.NavState``),
+    latched: GOAL_SEEKING, AVOIDING, RECOVERING, REACHED or FAILED, ``closed_loop.control.navigator.NavState``),
     ``~plan`` (visualization_msgs/MarkerArray: the chosen arc, coloured by what it is, every candidate's
     end, blue if safe, red if not, and the point the arcs were scored toward), ``~goal``
     (geometry_msgs/PoseStamped, latched: the goal being followed, in odom).
-    Parameters: :class:`closed_loop.navigator.NavigatorSettings` (limits, margins, weights; live with
+    Parameters: :class:`closed_loop.control.navigator.NavigatorSettings` (limits, margins, weights; live with
     dynamic_reconfigure), ``~goal_distance`` (:class:`GoalSettings`), ``~goal_x`` and ``~goal_y`` (m, in
     odom: both or neither), ``robot_description`` (the footprint and the laser's pose).
     """
@@ -278,7 +278,7 @@ class AvoidObstacles(StopsOnShutdown):
                 x, y = v / w * math.sin(w * s.horizon), v / w * (1.0 - math.cos(w * s.horizon))
             ends.points.append(Point(x, y, 0.05))
             ends.colors.append(ColorRGBA(*(SAFE_COLOUR if safe else UNSAFE_COLOUR)))
-        # The point the arcs were scored toward: a way round the obstacles to the goal (closed_loop.wavefront).
+        # The point the arcs were scored toward: a way round the obstacles to the goal (closed_loop.control.wavefront).
         aim = Marker(ns='aim', id=2, type=Marker.SPHERE, action=Marker.ADD)
         aim.header = chosen.header
         aim.pose.position = Point(float(plan.aim_xy[0]), float(plan.aim_xy[1]), 0.05)

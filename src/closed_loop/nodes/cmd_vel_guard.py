@@ -1,4 +1,4 @@
-"""cmd_vel_guard: a safety filter between any controller and the base (logic in closed_loop.guard)."""
+"""cmd_vel_guard: a safety filter between any controller and the base (logic in closed_loop.control.guard)."""
 import threading
 import time
 
@@ -8,12 +8,12 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from closed_loop.decisions import SilenceWatchdog
-from closed_loop.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
+from closed_loop.control.decisions import SilenceWatchdog
+from closed_loop.control.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
 from closed_loop.nodes.common import (LiveSettings, StopsOnShutdown, frame_id, init_node, load_settings,
                                       robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
-from closed_loop.scan import ScanError
+from closed_loop.control.scan import ScanError
 from closed_loop.sources import SourceCheck
 
 
@@ -36,7 +36,7 @@ class CmdVelGuard(StopsOnShutdown):
     Publications:
         ``cmd_vel`` (geometry_msgs/Twist): the guarded command, for the base.
         ``~verdict`` (std_msgs/String, latched): PASS, SLOWED or VETOED, on every change (logged with why).
-    Parameters: see :class:`closed_loop.guard.GuardSettings` (``~safety_margin`` m, ``~reaction_time`` s,
+    Parameters: see :class:`closed_loop.control.guard.GuardSettings` (``~safety_margin`` m, ``~reaction_time`` s,
         ``~braking_decel`` m/s^2, ``~angular_decel`` rad/s^2, ``~rate_hz``, ``~scan_timeout`` s,
         ``~cmd_timeout`` s, ``~scan_frame``); ``robot_description`` (URDF text, required). The margin,
         reaction time and decelerations are live (dynamic_reconfigure).

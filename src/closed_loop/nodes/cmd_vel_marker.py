@@ -8,7 +8,7 @@ from geometry_msgs.msg import Point, Twist
 from std_msgs.msg import ColorRGBA, Float32, String
 from visualization_msgs.msg import Marker
 
-from closed_loop import markers
+from closed_loop.control import markers
 from closed_loop.nodes.common import frame_id, init_node, load_settings
 
 ARROW_SHAFT_M = 0.04
@@ -31,7 +31,7 @@ class CmdVelMarker:
             for CLEAR / SLOW / STOP; turning in place is a ring; no command for ``~command_timeout`` s
             deletes it.
         obstacle_distance_marker (visualization_msgs/Marker): TEXT_VIEW_FACING with the distance and command.
-    Parameters: see :class:`closed_loop.markers.MarkerSettings`.
+    Parameters: see :class:`closed_loop.control.markers.MarkerSettings`.
     """
 
     def __init__(self):

@@ -3,13 +3,13 @@ from geometry_msgs.msg import Twist
 
 from closed_loop.commands import validate_command
 from closed_loop.nodes.common import stamp_to_sec
-from closed_loop.scan import Scan
+from closed_loop.control.scan import Scan
 
 
 def scan_from_msg(msg):
-    """A core :class:`closed_loop.scan.Scan` copied from a ``sensor_msgs/LaserScan``.
+    """A core :class:`closed_loop.control.scan.Scan` copied from a ``sensor_msgs/LaserScan``.
 
-    Nothing is checked here; call :func:`closed_loop.scan.validate_scan` (the geometry functions do).
+    Nothing is checked here; call :func:`closed_loop.control.scan.validate_scan` (the geometry functions do).
     """
     return Scan(stamp_s=stamp_to_sec(msg.header.stamp), frame_id=msg.header.frame_id,
                 angle_min=msg.angle_min, angle_max=msg.angle_max,

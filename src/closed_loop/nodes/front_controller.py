@@ -7,10 +7,10 @@ from geometry_msgs.msg import Twist
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from closed_loop.decisions import SilenceWatchdog
+from closed_loop.control.decisions import SilenceWatchdog
 from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, StopsOnShutdown, frame_id
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg
-from closed_loop.scan import ScanError, sector_min
+from closed_loop.control.scan import ScanError, sector_min
 from closed_loop.sources import SourceCheck
 
 
@@ -18,7 +18,7 @@ from closed_loop.sources import SourceCheck
 class FrontController(StopsOnShutdown):
     """Base of the controllers that drive on the nearest obstacle in the front sector.
 
-    The ``scan`` callback stores the front reading (``closed_loop.scan.SectorReading``) with its header
+    The ``scan`` callback stores the front reading (``closed_loop.control.scan.SectorReading``) with its header
     stamp, and calls :meth:`control` at once when :meth:`react_now` says the reading is news that cannot
     wait. A scan is only taken from one publisher in the expected frame (``~scan_frame``): while a
     second node publishes on ``scan``, or a scan comes in another frame, every scan is refused, an
@@ -30,7 +30,7 @@ class FrontController(StopsOnShutdown):
     (:class:`closed_loop.nodes.common.LiveSettings`): ``dynparam set /NODE stop_distance 0.8`` takes effect
     on the next scan; a change the settings class refuses (stop above slow) is refused with the reason.
 
-    Parameters every front controller has (``closed_loop.decisions.FrontControlSettings``):
+    Parameters every front controller has (``closed_loop.control.decisions.FrontControlSettings``):
         ``~front_half_angle`` (rad, default pi/2): half-width of the front sector around the robot's
         forward direction (angle 0 of the scan, unless the URDF mounts the laser turned).
         ``~rate_hz`` (Hz, default 10, at least 1): control timer rate; also the watchdog's rate

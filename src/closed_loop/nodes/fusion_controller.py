@@ -1,4 +1,4 @@
-"""fusion_controller: the navigator that waits for people (logic in closed_loop.fusion_navigator), behind the
+"""fusion_controller: the navigator that waits for people (logic in closed_loop.control.fusion_navigator), behind the
 usual topics and avoid_obstacles' own."""
 import json
 
@@ -9,11 +9,11 @@ from std_msgs.msg import ColorRGBA, String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from closed_loop import robot_model
-from closed_loop.fusion import Belief, CameraModel, FusionSettings, WaitSettings
-from closed_loop.fusion_navigator import FusionNavigator
+from closed_loop.control.fusion import Belief, CameraModel, FusionSettings, WaitSettings
+from closed_loop.control.fusion_navigator import FusionNavigator
 from closed_loop.nodes.avoid_obstacles import AvoidObstacles
 from closed_loop.nodes.common import init_node, load_settings, stamp_to_sec
-from closed_loop.tracking import TrackerSettings
+from closed_loop.control.tracking import TrackerSettings
 
 BELIEF_COLOURS = {Belief.PERSON: (0.95, 0.2, 0.1, 0.8), Belief.STATIC: (0.6, 0.6, 0.6, 0.8),
                   Belief.UNKNOWN: (1.0, 0.8, 0.0, 0.8)}
@@ -23,7 +23,7 @@ TRACK_HEIGHT_M = 0.5
 class FusionController(AvoidObstacles):
     """avoid_obstacles, plus: the scan's clusters tracked in odom, the vision node's red detection matched
     to a track through ``camera/camera_info`` and the camera's pose in the URDF, and a wait (WAITING, at
-    rest) while a PERSON, or a near UNKNOWN, is in the path (``closed_loop.fusion_navigator``).
+    rest) while a PERSON, or a near UNKNOWN, is in the path (``closed_loop.control.fusion_navigator``).
 
     Subscriptions, besides avoid_obstacles': ``red_centroid`` (geometry_msgs/PointStamped from vision_node:
     the red pixels' centroid, x = column, stamped with its frame's time) and ``camera/camera_info``
@@ -32,8 +32,8 @@ class FusionController(AvoidObstacles):
     decision, why, and every track's id, belief, why, position, speed and whether it is in the path) on
     every decision, and ``~tracks`` (visualization_msgs/MarkerArray in odom: a cylinder per track coloured by
     belief, red PERSON, grey STATIC, yellow UNKNOWN, and an arrow for its velocity).
-    Parameters, besides avoid_obstacles': :class:`closed_loop.tracking.TrackerSettings`,
-    :class:`closed_loop.fusion.FusionSettings`, :class:`closed_loop.fusion.WaitSettings` (read at start-up).
+    Parameters, besides avoid_obstacles': :class:`closed_loop.control.tracking.TrackerSettings`,
+    :class:`closed_loop.control.fusion.FusionSettings`, :class:`closed_loop.control.fusion.WaitSettings` (read at start-up).
     """
 
     def __init__(self):

@@ -7,7 +7,7 @@ from std_msgs.msg import Float32
 
 from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
-from closed_loop.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
+from closed_loop.control.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
 
 

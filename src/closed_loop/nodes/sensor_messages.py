@@ -1,4 +1,4 @@
-"""Sensor readings as ROS messages: one conversion per sensor of closed_loop.sensors, for sim_node's table.
+"""Sensor readings as ROS messages: one conversion per sensor of closed_loop.sim.sensors, for sim_node's table.
 
 A conversion is ``convert(port, sensor, reading, stamp)`` and returns ``[(topic, message), ...]``; ``port`` is
 the robot's side of the simulator node (``closed_loop.nodes.sim_node.RobotPort``): it may ask
@@ -21,7 +21,7 @@ from closed_loop.geometry import yaw_quaternion
 
 ODOM_FRAME = 'odom'
 WORLD_FRAME = 'world'
-#: world_markers: marker type per obstacle shape (closed_loop.shapes.SHAPES), and the namespace.
+#: world_markers: marker type per obstacle shape (closed_loop.sim.shapes.SHAPES), and the namespace.
 MARKER_TYPES = {'box': Marker.CUBE, 'cylinder': Marker.CYLINDER}
 WORLD_MARKER_NS = 'world'
 # A small diagonal covariance for odometry (m^2, rad^2), so consumers that weigh it do not divide by 0.

@@ -16,21 +16,22 @@ from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
-from closed_loop import drive, robot_model, world as world_mod
+from closed_loop.sim import drive, world as world_mod
+from closed_loop import robot_model
 from closed_loop.nodes import sensor_messages as to_msgs
 from closed_loop.nodes.common import LOG_PERIOD_S, init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
-from closed_loop.scheduler import Schedule, SchedulingSettings
-from closed_loop.sensors.camera import Camera
-from closed_loop.sensors.contacts import Contacts
-from closed_loop.sensors.lidar import Lidar
-from closed_loop.sensors.odometry import Odometry as OdometrySensor
-from closed_loop.sensors.wheels import WheelEncoders
-from closed_loop.sensors.world_state import WorldState
-from closed_loop.simulation import RobotSetup, SimSettings, Simulation
+from closed_loop.sim.scheduler import Schedule, SchedulingSettings
+from closed_loop.sim.sensors.camera import Camera
+from closed_loop.sim.sensors.contacts import Contacts
+from closed_loop.sim.sensors.lidar import Lidar
+from closed_loop.sim.sensors.odometry import Odometry as OdometrySensor
+from closed_loop.sim.sensors.wheels import WheelEncoders
+from closed_loop.sim.sensors.world_state import WorldState
+from closed_loop.sim.simulation import RobotSetup, SimSettings, Simulation
 from closed_loop.sources import SourceCheck
 
-#: One line per sensor: its core class (closed_loop.sensors), its publications (topic, type, queue size,
+#: One line per sensor: its core class (closed_loop.sim.sensors), its publications (topic, type, queue size,
 #: latched), its conversion (closed_loop.nodes.sensor_messages), whether it is sampled only while one of
 #: its topics has a subscriber (like a lazy camera driver), whether /clock goes out first (consumers
 #: judge a scan's or an image's age by it), and whether it is the world's rather than each robot's (served
@@ -162,7 +163,7 @@ class RobotPort:
 
 
 class SimNode:
-    """Runs :class:`closed_loop.simulation.Simulation` and publishes what the robot senses.
+    """Runs :class:`closed_loop.sim.simulation.Simulation` and publishes what the robot senses.
 
     Subscribes:
         cmd_vel (geometry_msgs/Twist): linear.x (m/s) and angular.z (rad/s); a command with NaN/Inf in
@@ -187,9 +188,9 @@ class SimNode:
         contact_count (std_msgs/UInt32, latched): contacts begun since start or the last reset.
     Services:
         ~reset_world, ~pause_physics, ~unpause_physics (std_srvs/Empty).
-    Parameters: :class:`closed_loop.simulation.SimSettings` (world, robot, drive),
-    :class:`closed_loop.scheduler.SchedulingSettings` (``~real_time_factor``, ``~max_clock_rate_hz``), and
-    each sensor's settings class (``closed_loop.sensors``: LIDAR, camera, odometry, wheel encoders).
+    Parameters: :class:`closed_loop.sim.simulation.SimSettings` (world, robot, drive),
+    :class:`closed_loop.sim.scheduler.SchedulingSettings` (``~real_time_factor``, ``~max_clock_rate_hz``), and
+    each sensor's settings class (``closed_loop.sim.sensors``: LIDAR, camera, odometry, wheel encoders).
     Sensors are served from one table, :data:`SENSORS`, by one schedule on simulated time.
     """
 

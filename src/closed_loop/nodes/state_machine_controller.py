@@ -2,11 +2,11 @@
 import rospy
 
 from closed_loop.commands import STOP
-from closed_loop.decisions import input_problem
+from closed_loop.control.decisions import input_problem
 from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist, twist_from_command
 from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
-from closed_loop.state_machine import BackUpSettings, BackUpStateMachine, react_now
+from closed_loop.control.state_machine import BackUpSettings, BackUpStateMachine, react_now
 
 
 class StateMachineController(FrontController):
@@ -26,7 +26,7 @@ class StateMachineController(FrontController):
         ``cmd_vel`` (geometry_msgs/Twist): forward speed only, every ``1 / ~rate_hz`` s of ROS
         time, zero from the watchdog and on shutdown.
         ``~mode`` (std_msgs/String, latched): the state, EXPLORING or BACKING_UP
-        (``closed_loop.state_machine.State``), at start and on every transition (the controllers'
+        (``closed_loop.control.state_machine.State``), at start and on every transition (the controllers'
         shared contract).
     Parameters:
         ``~trigger_distance`` (m, default 0.5): back up when the nearest obstacle ahead is closer.

@@ -1,7 +1,7 @@
 """stop_on_obstacle: the lesson's stop / slow / cruise controller, failing safe."""
 import rospy
 
-from closed_loop.decisions import StopSettings, Zone, decide, react_now, stop
+from closed_loop.control.decisions import StopSettings, Zone, decide, react_now, stop
 from closed_loop.nodes.common import init_node, load_settings
 from closed_loop.nodes.conversions import twist
 from closed_loop.nodes.front_controller import LOG_PERIOD_S, FrontController
@@ -26,7 +26,7 @@ class StopOnObstacle(FrontController):
         time, at once on new danger (with ``~react_immediately``), zero from the watchdog and on
         shutdown.
         ``~mode`` (std_msgs/String, latched): the zone, CLEAR, SLOW or STOP
-        (``closed_loop.decisions.Zone``), on every change (the controllers' shared contract).
+        (``closed_loop.control.decisions.Zone``), on every change (the controllers' shared contract).
     Parameters:
         ``~stop_distance`` (m, default 0.5): stop when the nearest obstacle ahead is closer.
         ``~slow_distance`` (m, default 1.0): slow down when it is closer.
@@ -44,7 +44,7 @@ class StopOnObstacle(FrontController):
         FrontController.__init__(self, load_settings(StopSettings))
 
     def react_now(self, reading, age_s):
-        """:func:`closed_loop.decisions.react_now`: the first decision, and new danger unless
+        """:func:`closed_loop.control.decisions.react_now`: the first decision, and new danger unless
         ``~react_immediately`` is false.
 
         The first decision (no mode published yet) is made at once whatever ``~react_immediately``

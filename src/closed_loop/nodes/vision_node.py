@@ -1,4 +1,4 @@
-"""The vision node: camera images in, red-object detections out (logic in closed_loop.vision)."""
+"""The vision node: camera images in, red-object detections out (logic in closed_loop.control.vision)."""
 import rospy
 from geometry_msgs.msg import PointStamped
 from sensor_msgs.msg import Image
@@ -6,7 +6,7 @@ from std_msgs.msg import Bool, UInt32
 
 from closed_loop.image_encoding import ImageEncodingError, array_to_image, image_to_array
 from closed_loop.nodes.common import init_node, load_settings
-from closed_loop.vision import SUPPORTED_ENCODINGS, VisionError, VisionSettings, detect_red_encoded
+from closed_loop.control.vision import SUPPORTED_ENCODINGS, VisionError, VisionSettings, detect_red_encoded
 
 #: Socket buffer of the image subscription. rospy's 64 KiB default holds less than one camera
 #: frame, so frames would queue in the socket and ``queue_size=1`` would not drop stale ones;

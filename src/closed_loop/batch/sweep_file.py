@@ -1,0 +1,158 @@
+"""Sweep files: a grid of episodes (``closed_loop.batch.episode.EpisodeSpec``) in YAML, checked whole before
+anything runs. Free of ROS.
+
+.. code-block:: yaml
+
+    name: stop_threshold            # names the output directory (letters, digits, _ and -)
+    base:                           # EpisodeSpec fields every episode shares
+      world: wall
+      controller: stop_on_obstacle
+      time_limit_s: 20
+    grid:                           # every combination of these is one episode
+      settings.stop_distance: {from: 0.1, to: 0.6, step: 0.1}
+      settings.cruise_speed: [0.3, 0.5, 1.0]
+      seed: {from: 0, to: 4, step: 1}
+      scan_noise: [0.0, 0.01]
+    plot: {x: settings.stop_distance, lines: settings.cruise_speed}     # optional
+
+A grid key is an EpisodeSpec field (``world``, ``robot``, ``controller``, ``seed``, ``scan_noise``,
+``goal``, ``time_limit_s``, ...), or ``settings.NAME`` (a controller ``~parameter``), ``sim.NAME`` (a
+simulator or sensor ``~parameter``) or ``world.generator.NAME`` (a ``closed_loop.sim.clutter.ClutterSettings``
+field). Its values are a list, or ``{from, to, step}`` (both ends included). Every combination is then
+checked as an episode would be (the controller's settings by the class its node uses, the world loaded or
+its generator's settings checked); the first problem is an error that names the file, the field and what
+was expected.
+"""
+import itertools
+import math
+import re
+
+import yaml
+
+from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare
+
+SPEC_FIELDS = tuple(EpisodeSpec.__dataclass_fields__)
+NAME_PATTERN = re.compile(r'^[A-Za-z0-9_-]{1,64}$')
+#: A grid may not have more combinations than this (a typo in a range should not start a million).
+MAX_EPISODES = 1000000
+
+
+class SweepError(ValueError):
+    """A sweep file that cannot be run; the message names the file, the field and what was expected."""
+
+
+def _values(source, key, raw):
+    where = '%s: grid.%s' % (source, key)
+    if isinstance(raw, dict):
+        if set(raw) != {'from', 'to', 'step'}:
+            raise SweepError('%s: expected a list of values or {from, to, step}, got %r' % (where, raw))
+        a, b, step = raw['from'], raw['to'], raw['step']
+        for name, value in (('from', a), ('to', b), ('step', step)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise SweepError('%s.%s: expected a number, got %r' % (where, name, value))
+        if not step > 0 or b < a:
+            raise SweepError('%s: expected step > 0 and to >= from, got %r' % (where, raw))
+        count = int(math.floor((b - a) / step + 1e-9)) + 1
+        if count > MAX_EPISODES:
+            raise SweepError('%s: %d values is too many' % (where, count))
+        integral = all(isinstance(v, int) for v in (a, b, step))
+        return [a + i * step if integral else round(a + i * step, 10) for i in range(count)]
+    if not isinstance(raw, list) or not raw:
+        raise SweepError('%s: expected a non-empty list of values or {from, to, step}, got %r' % (where, raw))
+    return list(raw)
+
+
+def _check_key(source, key):
+    head, _, rest = key.partition('.')
+    if head in ('settings', 'sim') and rest and '.' not in rest:
+        return
+    if key.startswith('world.generator.') and key.count('.') == 2:
+        return
+    if key in SPEC_FIELDS and key not in ('settings', 'sim'):
+        return
+    raise SweepError('%s: grid.%s: expected an episode field (%s), settings.NAME, sim.NAME or '
+                     'world.generator.NAME' % (source, key, ', '.join(f for f in SPEC_FIELDS
+                                                                    if f not in ('settings', 'sim'))))
+
+
+def apply(base, assignment):
+    """The spec fields of ``base`` (a dict) with the grid's ``assignment`` ({key: value}) put in."""
+    fields = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
+    for key, value in assignment.items():
+        head, _, rest = key.partition('.')
+        if head in ('settings', 'sim'):
+            fields[head] = dict(fields.get(head) or {}, **{rest: value})
+        elif head == 'world' and rest:
+            world = fields.get('world')
+            generator = dict(world['generator']) if isinstance(world, dict) and 'generator' in world else {}
+            generator[rest.split('.', 1)[1]] = value
+            fields['world'] = {'generator': generator}
+        else:
+            fields[key] = value
+    return fields
+
+
+class Sweep:
+    """A checked sweep: ``name``, ``keys`` (the grid's, in file order), ``specs`` [(assignment, spec)],
+    ``plot`` ({'x': key, 'lines': key} or None)."""
+
+    def __init__(self, name, keys, specs, plot=None):
+        self.name, self.keys, self.specs, self.plot = name, keys, specs, plot
+
+
+def build(name, base, grid, plot=None, source='<sweep>'):
+    """A :class:`Sweep` from a base spec (dict), a grid ({key: values}) and a plot choice, every
+    combination checked."""
+    if not isinstance(name, str) or not NAME_PATTERN.match(name):
+        raise SweepError('%s: name: expected 1 to 64 letters, digits, _ or -, got %r' % (source, name))
+    if not isinstance(base, dict):
+        raise SweepError('%s: base: expected a mapping of episode fields, got %r' % (source, base))
+    if not isinstance(grid, dict) or not grid:
+        raise SweepError('%s: grid: expected a mapping of keys to value lists, got %r' % (source, grid))
+    axes = []
+    for key, raw in grid.items():
+        _check_key(source, str(key))
+        axes.append((str(key), _values(source, key, raw)))
+    total = 1
+    for _, values in axes:
+        total *= len(values)
+    if total > MAX_EPISODES:
+        raise SweepError('%s: grid: %d episodes is more than %d' % (source, total, MAX_EPISODES))
+    if plot is not None:
+        if not isinstance(plot, dict) or not set(plot) <= {'x', 'lines'} or 'x' not in plot:
+            raise SweepError("%s: plot: expected {x: KEY, lines: KEY} (lines optional), got %r" % (source, plot))
+        for part, key in plot.items():
+            if key not in grid:
+                raise SweepError('%s: plot.%s: expected one of the grid keys (%s), got %r'
+                                 % (source, part, ', '.join(grid), key))
+    cache, specs = {}, []
+    keys = [k for k, _ in axes]
+    for combo in itertools.product(*[values for _, values in axes]):
+        assignment = dict(zip(keys, combo))
+        where = '%s: grid (%s)' % (source, ', '.join('%s=%r' % kv for kv in assignment.items()))
+        try:
+            spec = EpisodeSpec.from_dict(apply(base, assignment), where)
+            prepare(spec, cache)
+        except EpisodeError as error:
+            raise SweepError('%s: %s' % (where, error) if not str(error).startswith(where) else str(error))
+        except TypeError as error:
+            raise SweepError('%s: %s' % (where, error))
+        specs.append((assignment, spec))
+    return Sweep(name, keys, specs, plot)
+
+
+def load(path):
+    """The :class:`Sweep` of the file at ``path``."""
+    try:
+        with open(path) as f:
+            data = yaml.safe_load(f)
+    except OSError as error:
+        raise SweepError('%s: cannot be read (%s)' % (path, error.strerror or error))
+    except yaml.YAMLError as error:
+        raise SweepError('%s: not valid YAML (%s)' % (path, error))
+    if not isinstance(data, dict):
+        raise SweepError('%s: expected a mapping with name, base, grid (and plot), got %r' % (path, data))
+    unknown = sorted(set(data) - {'name', 'base', 'grid', 'plot'})
+    if unknown:
+        raise SweepError('%s: %s: expected only name, base, grid and plot' % (path, unknown[0]))
+    return build(data.get('name'), data.get('base', {}), data.get('grid'), data.get('plot'), path)

@@ -1,0 +1,12 @@
+"""The control cores, free of ROS and of the simulator: plain numbers and arrays in and out.
+
+Scan geometry (``scan``), the stop/slow/cruise rule (``decisions``), the lesson's state machine
+(``state_machine``), the loop's shared settings and staleness rule (``loop``), the reactive navigator
+(``navigator``) over its local planner (``local_planner``, ``wavefront``, ``clearance_field``,
+``scan_memory``), the command guard (``guard``), tracking and fusion (``tracking``, ``fusion``,
+``fusion_navigator``), red-object vision (``vision``), what a controller draws (``drawing``) and the
+command arrow (``markers``).
+
+May import: numpy, cv2 and the package's shared helpers. Never pybullet, ``sim``, ``controllers``,
+``batch`` or ``nodes``.
+"""

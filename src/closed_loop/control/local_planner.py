@@ -1,0 +1,298 @@
+"""The reactive navigator's local planner: a dynamic window over (v, w), each candidate's path predicted and
+checked against the scan with the robot's footprint rectangle, the safe ones scored toward the goal. Its
+settings and the states on top are in ``closed_loop.control.navigator``.
+
+Why a dynamic window (Fox, Burgard and Thrun 1997; ROS's dwa_local_planner): it plans in the robot's own
+command space, so speed and acceleration limits hold by construction; it judges a command by the path the
+robot would sweep, with its real rectangle, not a point or a disc, so it neither enters a gap narrower
+than the robot nor cuts a corner; and it needs no map, only the newest scan. A gap-following or VFH+
+histogram picks a direction and leaves the footprint to a margin; the window checks the footprint itself.
+
+Safety: each candidate is followed for ``horizon`` seconds (a control period and the scan's delay, with room
+to spare) and then braked to rest at the robot's deceleration; its clearance is the least distance between
+the footprint, at every predicted pose, and any scan point. A command whose clearance comes under
+``safety_margin`` is never chosen (when the robot is already closer than the margin, only a turn in place
+that does not bring it closer is). With no safe command it stops. Preference: each candidate is also
+followed for ``lookahead`` seconds without braking, and scored on where that arc points (toward the goal),
+how much room it keeps, how fast it goes, and how long it runs before it would come within the margin.
+The robot re-plans every period, so the long arc is a preference, the short one a guarantee.
+
+The clearance comes from a distance transform of the scan points on a local grid, read at points along the
+footprint's outline (``closed_loop.control.clearance_field``), so a decision costs a few milliseconds at 720 rays (``make bench``). Free
+of ROS.
+"""
+import dataclasses
+import math
+
+import numpy
+
+from closed_loop.control import wavefront
+from closed_loop.control.clearance_field import (FIELD_ERROR_M, OUTLINE_STEP_M, DistanceField, clearances, edge_clearance,
+                                         keeps_margin, outline32)
+from closed_loop.control.guard import footprint_clearance, path_clearance, scan_points
+
+#: Step between predicted poses (s): between two poses an obstacle point cannot slip through more than the
+#: margin allows.
+PREDICTION_STEP_S = 0.1
+#: Largest gap between samples of the footprint's outline on the longer arcs that are only scored (m).
+PREFERENCE_OUTLINE_STEP_M = 0.2
+#: Step between the poses of the longer arcs that are only scored (s).
+PREFERENCE_STEP_S = 0.2
+#: Clearance beyond which more room adds nothing to a command's score (m).
+CLEARANCE_CAP_M = 1.0
+#: The way to the aim must be this much wider (m, each side) than the robot plus its margins: a gap the
+#: window could only just pass is not one to aim for.
+AIM_ROOM_M = 0.05
+#: At most this many candidates in doubt are checked exactly per decision (each costs about 0.1 ms).
+EXACT_CHECKS = 4
+#: An aim more than this far (rad) to a side decides which way to turn in place.
+AIM_SIDE_RAD = 0.2
+#: With a corridor (no goal), this near (m) to where its line is closed off, the robot stops: blocked.
+BLOCKED_STOP_M = 0.3
+#: Candidates per axis of the window.
+LINEAR_SAMPLES = 5
+ANGULAR_SAMPLES = 15
+
+
+class NavigatorError(ValueError):
+    """Unusable input to the planner (a bad pose, goal or speed)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """The planner's answer: the command (m/s, rad/s), what it is and why, the chosen path's least
+    clearance (m), the predicted poses of the chosen command ((K, 3) x, y, yaw in the robot's frame), and
+    every candidate's (v, w, clearance, safe) and the point aimed at, for display."""
+    linear_x: float
+    angular_z: float
+    kind: str          # 'goal' (heading for it), 'avoid' (steering around), 'turn' (in place), 'stop'
+    reason: str
+    clearance_m: float
+    path: numpy.ndarray
+    candidates: numpy.ndarray
+    aim_xy: tuple = (0.0, 0.0)   # the point the arcs were scored toward (the robot's frame, m)
+    target: tuple = (0.0, 0.0)   # the chosen candidate (m/s, rad/s), which the command steps toward
+
+
+def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
+    """Poses (C, K, 3) for candidates ``v``, ``w`` (C,) from (v0, w0): speeds move toward the candidate at the
+    accelerations for ``horizon_s``, then to zero at the same rates; K = ``steps`` poses, PREDICTION_STEP_S
+    apart (the speed of each step is the one reached at its end: the pose runs slightly ahead)."""
+    dt = step_s
+    t = numpy.arange(1, steps + 1) * dt
+    follow = t <= horizon_s + 1e-9
+
+    def speeds(start, target, rate):
+        target = numpy.asarray(target, float)[:, None]
+        along = start + numpy.clip(target - start, -rate * t, rate * t)          # ramp toward the candidate
+        at_end = start + numpy.clip(target - start, -rate * horizon_s, rate * horizon_s)
+        after = numpy.sign(at_end) * numpy.maximum(numpy.abs(at_end) - rate * (t - horizon_s), 0.0)
+        return numpy.where(follow, along, after)
+    vs = speeds(v0, v, settings.accel)
+    ws = speeds(w0, w, settings.yaw_accel)
+    yaw = numpy.cumsum(ws * dt, axis=1)
+    mid = yaw - 0.5 * ws * dt
+    x = numpy.cumsum(vs * numpy.cos(mid) * dt, axis=1)
+    y = numpy.cumsum(vs * numpy.sin(mid) * dt, axis=1)
+    return numpy.stack((x, y, yaw), axis=2).astype(numpy.float32)
+
+
+def check_finite(name, *values):
+    for value in values:
+        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+            raise NavigatorError('%s: expected finite numbers, got %r' % (name, values))
+
+
+def blind_points(points, scan, laser_pose):
+    """Those of ``points`` ((N, 2), the robot's frame) outside the scan's sweep, as seen from the laser."""
+    if scan.angle_max - scan.angle_min + scan.angle_increment >= 2 * math.pi - 1e-6 or not len(points):
+        return points[:0]
+    bearing = numpy.arctan2(points[:, 1] - laser_pose.y, points[:, 0] - laser_pose.x) - laser_pose.yaw
+    middle, half = 0.5 * (scan.angle_min + scan.angle_max), 0.5 * (scan.angle_max - scan.angle_min)
+    off = numpy.abs(numpy.arctan2(numpy.sin(bearing - middle), numpy.cos(bearing - middle)))
+    return points[off > half + scan.angle_increment]
+
+
+def step_toward(target, previous, measured, rate, period_s, limit):
+    """One period's step of a speed toward ``target``, at most ``rate`` x ``period_s``, from the command
+    sent last (``previous``; None: the ``measured`` speed), and never more than that step above the
+    measured speed in magnitude, nor beyond +-``limit``.
+
+    From the measured speed alone, a base that overshoots its command (a skid-steer one, in a turn) would
+    be sent ever more of it; the magnitude bound keeps a base held back (stopped by a watchdog) from
+    being sent a jump the plan did not predict."""
+    step = rate * period_s
+    base = measured if previous is None else previous
+    value = min(max(target, base - step), base + step)
+    reach = min(abs(measured) + step, limit)
+    return float(min(max(value, -reach), reach))
+
+
+def _confirm(score, safe, maybe, near, footprint, poses, margin):
+    """The best-scoring candidate that is safe: one the grid left in doubt (``maybe``) is checked exactly
+    against the points, best first, at most EXACT_CHECKS of them; ``safe`` and ``score`` are updated.
+    None when none is safe."""
+    for _ in range(EXACT_CHECKS):
+        best = int(numpy.argmax(score))
+        if score[best] == -numpy.inf or safe[best]:
+            break
+        maybe[best] = False
+        if keeps_margin(near, footprint, poses[best], margin):
+            safe[best] = True
+        else:
+            score[best] = -numpy.inf
+    score[~safe] = -numpy.inf
+    best = int(numpy.argmax(score))
+    return best if safe[best] else None
+
+
+def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0, scanned=None,
+         previous=None, corridor=None):
+    """The command for now: a :class:`Plan`.
+
+    ``scan``: a :class:`closed_loop.control.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
+    frame (:class:`closed_loop.robot_model.Pose2DInBase`); ``footprint``: the robot's rectangle; ``v0``,
+    ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m);
+    ``remembered``: (M, 2) points of earlier scans in the robot's frame (``closed_loop.control.scan_memory``), used
+    to choose the way around, and for safety only where the scanner cannot see now; ``turning``: +1 or -1 while the last decision was a
+    turn in place that way (it goes on that way rather than swing back and forth between two ways
+    round), 0 otherwise; ``scanned``: the scan's points in the robot's frame if already computed;
+    ``previous``: the command sent last (m/s, rad/s), which the step is taken from; ``corridor``: where
+    the way round may go (``closed_loop.control.wavefront.aim``'s), None for anywhere.
+    """
+    check_finite('v0, w0', v0, w0)
+    check_finite('goal_xy', *goal_xy)
+    s = settings
+    scanned = scan_points(scan, laser_pose) if scanned is None else scanned
+    # Where the scanner cannot see (behind a LIDAR of less than a full turn), what was seen there before
+    # is the best knowledge there is: remembered points in that blind sector count for safety too, so a
+    # turn does not swing the robot's back into something it saw a moment ago.
+    points = numpy.concatenate((scanned, blind_points(remembered, scan, laser_pose))) \
+        if remembered is not None and len(remembered) else scanned
+    top_v, top_w = max(s.max_speed, abs(v0)), max(s.max_yaw_rate, abs(w0))
+    # Followed for the horizon, then both speeds brake at once: at rest after the longer of the two.
+    safe_steps = int(math.ceil((s.horizon + max(top_v / s.accel, top_w / s.yaw_accel)) / PREDICTION_STEP_S)) + 1
+    long_steps = int(math.ceil(s.lookahead / PREFERENCE_STEP_S))
+    radius = math.hypot(max(abs(footprint.x_min), abs(footprint.x_max)),
+                        max(abs(footprint.y_min), abs(footprint.y_max)))
+    longest_s = max(safe_steps * PREDICTION_STEP_S, long_steps * PREFERENCE_STEP_S)
+    reach = top_v * longest_s + radius + CLEARANCE_CAP_M
+    near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach] if len(points) else points
+    field = DistanceField(near, reach)
+    shape = outline32(footprint, OUTLINE_STEP_M)
+    coarse = outline32(footprint, PREFERENCE_OUTLINE_STEP_M)
+
+    # Candidates are targets over the whole speed range; each is predicted with the ramp from (v0, w0) at
+    # the accelerations, and what is sent is the first period's step of that ramp (the dynamic window).
+    vs = numpy.linspace(0.0, s.max_speed, LINEAR_SAMPLES)
+    # Turn rates closer together near zero (u|u| over -1..1), where a small heading error is corrected.
+    u = numpy.linspace(-1.0, 1.0, ANGULAR_SAMPLES)
+    ws = s.max_yaw_rate * u * numpy.abs(u)
+    v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
+    safe_poses = predict(v0, w0, v, w, s, s.horizon, safe_steps)
+    clear = clearances(field, shape, safe_poses, OUTLINE_STEP_M).min(axis=1)
+    safe = clear >= s.safety_margin
+    # The grid reads low by up to FIELD_ERROR_M: a candidate that reads that little short of the margin may
+    # yet keep it, and is checked exactly if it scores best (below).
+    maybe = ~safe & (clear >= s.safety_margin - FIELD_ERROR_M)
+    now = float(edge_clearance(field.at(shape).min(), OUTLINE_STEP_M))
+    if now < s.safety_margin:
+        now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
+    if now < s.safety_margin:
+        # Already within the margin: only a turn in place that brings no point closer, judged exactly (the
+        # grid is too coarse to see a centimetre), and only while the robot is nearly at rest.
+        maybe[:] = False
+        for i in numpy.nonzero((v == 0.0) & ~safe)[0]:
+            if abs(v0) < 0.05 and path_clearance(near, footprint, safe_poses[i]) >= now:
+                safe[i] = True
+    arcs = predict(v0, w0, v, w, s, s.lookahead, long_steps, PREFERENCE_STEP_S)
+    along = clearances(field, coarse, arcs, PREFERENCE_OUTLINE_STEP_M)
+    candidates = numpy.column_stack((v, w, clear, safe))
+
+    goal_distance = math.hypot(*goal_xy)
+    # What the arcs are scored toward: a point along the way to the goal through the free space the scan
+    # shows (closed_loop.control.wavefront), or the goal itself when it shows none.
+    half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
+    seen = scanned if remembered is None or not len(remembered) else numpy.concatenate((scanned, remembered))
+    way = wavefront.way(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
+                        0.5 * (footprint.y_max - footprint.y_min), corridor)
+    aim_xy = goal_xy if way is None else way.aim
+    if corridor is not None and way is not None and way.goal != tuple(goal_xy):
+        # The line is closed off within the corridor: go up to where, steering for the far point (which keeps
+        # the heading; a near one would turn a small offset from the line into a large angle), and stop.
+        if math.hypot(*way.goal) <= BLOCKED_STOP_M:
+            why = ('the way along the start heading is closed off %.2f m ahead (no way round within '
+                   'hold_corridor): stopped before it' % math.hypot(*way.goal))
+            return Plan(0.0, 0.0, 'stop', why, now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+        if way.aim == way.goal:
+            aim_xy = goal_xy
+    if not (safe | maybe).any():
+        return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
+                    '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
+                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+    # How long each arc runs before it would come within the margin (1: the whole lookahead), and where its
+    # free part comes closest to the goal (its end, unless it passes the goal): how far that is, how much
+    # closer than now, pointing how well at the goal, with how much room around it.
+    blocked = along < s.safety_margin - FIELD_ERROR_M / 2   # the grid's middle estimate: a preference only
+    free_steps = numpy.where(blocked.any(axis=1), blocked.argmax(axis=1), long_steps)
+    free = free_steps / long_steps
+    reached = numpy.arange(long_steps)[None, :] < numpy.maximum(free_steps, 1)[:, None]
+    to_aim = numpy.hypot(aim_xy[0] - arcs[..., 0], aim_xy[1] - arcs[..., 1])
+    last = numpy.argmin(numpy.where(reached, to_aim, numpy.inf), axis=1)
+    end = arcs[numpy.arange(len(v)), last]
+    bearing = numpy.arctan2(aim_xy[1] - end[:, 1], aim_xy[0] - end[:, 0]) - end[:, 2]
+    heading = 1.0 - numpy.abs(numpy.arctan2(numpy.sin(bearing), numpy.cos(bearing))) / math.pi
+    progress = (math.hypot(*aim_xy) - to_aim[numpy.arange(len(v)), last]) / (s.max_speed * s.lookahead)
+    room = numpy.minimum(numpy.where(reached, along, numpy.inf).min(axis=1), CLEARANCE_CAP_M) / CLEARANCE_CAP_M
+    speed = v / s.max_speed
+    # Near the goal, speed stops counting (no overshoot).
+    if goal_distance < s.max_speed ** 2 / (2 * s.accel) + s.goal_tolerance:
+        speed = speed * 0.0
+    # An arc that runs into the margin counts for its free part only: the sooner, the less it is worth.
+    score = (free * (s.heading_weight * heading + s.speed_weight * speed) + s.progress_weight * progress
+             + s.clearance_weight * room)
+    score = numpy.where(safe | maybe, score, -numpy.inf)
+    best = _confirm(score, safe, maybe, near, footprint, safe_poses, s.safety_margin)
+    candidates[:, 3] = safe
+    if best is None:
+        return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
+                    '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
+                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+    turns = (safe | maybe) & (v == 0.0) & (w != 0.0)
+    if v[best] == 0.0 and w[best] == 0.0 and turns.any() and (v > 0).any():
+        # Standing still beats every way forward: turn in place rather than stand facing the obstacle,
+        # toward the aim (the way round) when it lies to a side, else toward the side whose forward arcs
+        # run freer; the fastest such turn the footprint can make, checked exactly if the grid doubts it.
+        bearing = math.atan2(aim_xy[1], aim_xy[0])
+        if turning:
+            toward = turning
+        elif abs(bearing) > AIM_SIDE_RAD:
+            toward = math.copysign(1.0, bearing)
+        else:
+            left = free[(v > 0) & (w > 0)].max(initial=0.0)
+            right = free[(v > 0) & (w < 0)].max(initial=0.0)
+            toward = 1.0 if left >= right else -1.0
+        order = sorted(numpy.nonzero(turns)[0], key=lambda i: (numpy.sign(w[i]) != toward, -abs(w[i])))
+        for i in order[:EXACT_CHECKS]:
+            if safe[i] or keeps_margin(near, footprint, safe_poses[i], s.safety_margin):
+                safe[i] = candidates[i, 3] = True
+                best = int(i)
+                break
+    # What is sent is one period's step toward the target (step_toward).
+    period_s = 1.0 / s.rate_hz
+    prev_v, prev_w = (None, None) if previous is None else previous
+    vb = step_toward(float(v[best]), prev_v, v0, s.accel, period_s, s.max_speed)
+    wb = step_toward(float(w[best]), prev_w, w0, s.yaw_accel, period_s, s.max_yaw_rate)
+    cb = float(along[best].min())
+    # What a pure goal-seeker would do: the moving candidate pointing best at the goal, obstacles aside.
+    moving = v > 0
+    seek = int(numpy.argmax(numpy.where(moving, heading, -numpy.inf))) if moving.any() else best
+    if v[best] == 0.0 and w[best] == 0.0:
+        kind, why = 'stop', 'stopped: nothing safe beats standing still'
+    elif v[best] == 0.0:
+        kind, why = 'turn', 'turning in place (toward %.2f rad/s): no safe way forward' % w[best]
+    elif not safe[seek] or free[seek] < 1.0 or cb < s.avoid_distance:
+        kind, why = 'avoid', 'steering around an obstacle %.2f m from the path' % max(cb, 0.0)
+    else:
+        kind, why = 'goal', 'heading for the goal %.2f m away' % goal_distance
+    return Plan(vb, wb, kind, why, cb, arcs[best], candidates, tuple(aim_xy), (float(v[best]), float(w[best])))

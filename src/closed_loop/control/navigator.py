@@ -1,0 +1,323 @@
+"""The reactive navigator: its settings, and the states over the local planner (``closed_loop.control.local_planner``).
+
+GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (back up where the scan sees the rear
+clear, then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
+REACHED within ``goal_tolerance`` of the goal; FAILED after ``give_up_timeout`` without progress. With no
+goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
+numbers. Free of ROS.
+"""
+import dataclasses
+import enum
+import math
+
+import numpy
+
+from closed_loop import robot_model
+from closed_loop.control.guard import footprint_clearance, path_clearance, scan_points
+from closed_loop.control.local_planner import PREDICTION_STEP_S, check_finite, plan, predict, step_toward
+from closed_loop.control.scan import sample_angles
+from closed_loop.control.scan_memory import ScanMemory
+from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
+
+
+@dataclasses.dataclass
+class NavigatorSettings:
+    """avoid_obstacles' ``~parameters``; the speed and acceleration limits come from the robot profile."""
+    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=MIN_RATE_HZ)
+    scan_timeout: float = param(0.5, 's', 'stop when the newest scan (or odometry) is older than this',
+                                minimum=0.0, maximum=5.0, exclusive_minimum=True)
+    scan_frame: str = param(robot_model.SCAN_FRAME, '', "the laser's frame_id: scans in any other frame are "
+                            'refused (stop)')
+    max_speed: float = param(0.5, 'm/s', 'forward speed limit', minimum=0.0, exclusive_minimum=True, live=True)
+    max_yaw_rate: float = param(1.5, 'rad/s', 'turn rate limit', minimum=0.0, exclusive_minimum=True, live=True)
+    accel: float = param(1.0, 'm/s^2', 'linear acceleration and braking the plan counts on', minimum=0.05,
+                         live=True)
+    yaw_accel: float = param(3.0, 'rad/s^2', 'yaw acceleration the plan counts on', minimum=0.1, live=True)
+    safety_margin: float = param(0.1, 'm', 'least clearance between the footprint and any scan point along '
+                                 'a chosen path', minimum=0.05, maximum=1.0, live=True)
+    avoid_distance: float = param(0.5, 'm', 'a chosen path closer than this to an obstacle (or a turn '
+                                  'away from the goal) is AVOIDING', minimum=0.0, live=True)
+    horizon: float = param(0.5, 's', 'safety: how long a candidate is assumed followed before braking '
+                           '(control period, scan delay and room to spare)', minimum=0.1, maximum=3.0, live=True)
+    lookahead: float = param(2.0, 's', 'preference: how far along each candidate arc is scored', minimum=0.5,
+                             maximum=6.0, live=True)
+    goal_tolerance: float = param(0.1, 'm', 'REACHED within this distance of the goal', minimum=0.05,
+                                  live=True)
+    memory_time: float = param(10.0, 's', 'scan points are remembered this long (in odom) to choose the way '
+                               'around (and, where the LIDAR cannot see, for safety); 0: no memory', minimum=0.0,
+                               maximum=120.0, live=True)
+    hold_lookahead: float = param(3.0, 'm', 'with no goal: aim this far ahead of the robot along the start '
+                                  'heading',
+                                  minimum=0.5, live=True)
+    hold_corridor: float = param(2.0, 'm', 'with no goal: the way round an obstacle keeps within this distance '
+                                 'of the line ahead along the start heading (a wall across it blocks the way, '
+                                 'to be stopped at, not gone round)', minimum=0.0, exclusive_minimum=True, live=True)
+    stuck_timeout: float = param(6.0, 's', 'RECOVERING after this long without getting closer to the goal',
+                                 minimum=0.5, live=True)
+    give_up_timeout: float = param(60.0, 's', 'FAILED after this long without getting closer to the goal',
+                                   minimum=1.0, live=True)
+    heading_weight: float = param(0.6, '', 'score weight of pointing at the goal', minimum=0.0, live=True)
+    progress_weight: float = param(1.0, '', 'score weight of getting closer to the goal', minimum=0.0, live=True)
+    clearance_weight: float = param(1.0, '', 'score weight of clearance (up to 1 m)', minimum=0.0, live=True)
+    speed_weight: float = param(0.2, '', 'score weight of going fast', minimum=0.0, live=True)
+
+    def check_together(self):
+        if not self.give_up_timeout > self.stuck_timeout:
+            raise SettingsError('~give_up_timeout: expected more than stuck_timeout (%g s), got %r'
+                                % (self.stuck_timeout, self.give_up_timeout))
+
+
+@dataclasses.dataclass
+class GoalSettings:
+    """Where avoid_obstacles heads unless ``move_base_simple/goal`` says otherwise (its ``~parameters``;
+    ``~goal_x`` and ``~goal_y``, both or neither, give the goal in odom)."""
+    goal_distance: float = param(10.0, 'm', 'with no ~goal_x/~goal_y: the goal is this far ahead along the '
+                                 'start heading; 0: no goal, hold the start heading forever', minimum=0.0)
+
+
+#: Backing up needs the scan to see behind: rays within this of straight back (rad).
+REAR_HALF_ANGLE_RAD = math.radians(30.0)
+
+
+def rear_seen(scan, laser_pose):
+    """True if the scan has rays toward the whole rear sector (a 270-degree LIDAR facing forward has
+    none: then what is behind is unknown, and backing up is not safe)."""
+    angles = numpy.asarray(sample_angles(scan)) + laser_pose.yaw
+    off_back = numpy.abs(numpy.arctan2(numpy.sin(angles - math.pi), numpy.cos(angles - math.pi)))
+    covered = off_back <= REAR_HALF_ANGLE_RAD
+    if not covered.any():
+        return False
+    spacing = abs(scan.angle_increment)
+    return covered.sum() * spacing >= 2 * REAR_HALF_ANGLE_RAD - 2 * spacing
+
+
+def in_danger(sent, scan_points_xy, settings, footprint):
+    """True if the command being followed (``sent``, m/s and rad/s) is no longer safe: its predicted path
+    comes within ``safety_margin`` of the scan's points (robot frame). The node acts at once on such a
+    scan rather than at its next tick."""
+    v, w = sent
+    if v == 0.0 and w == 0.0:
+        return False
+    s = settings
+    steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
+    poses = predict(v, w, [v], [w], s, s.horizon, steps)
+    return path_clearance(scan_points_xy, footprint, poses[0]) < s.safety_margin
+
+
+def stale_input(now_s, scan_stamp_s, odom_stamp_s, scan_timeout_s):
+    """Why the newest scan or odometry cannot be acted on (older, or stamped later, than
+    ``scan_timeout_s``), or None."""
+    for name, stamp in (('scan', scan_stamp_s), ('odometry', odom_stamp_s)):
+        age = now_s - stamp
+        if age > scan_timeout_s or age < -scan_timeout_s:
+            return '%s is %.2f s old (scan_timeout %.2f s)' % (name, age, scan_timeout_s)
+    return None
+
+
+class NavState(enum.Enum):
+    """What the navigator is doing (its ``~mode``)."""
+    GOAL_SEEKING = 'GOAL_SEEKING'
+    AVOIDING = 'AVOIDING'
+    RECOVERING = 'RECOVERING'
+    REACHED = 'REACHED'
+    FAILED = 'FAILED'
+
+
+#: Getting this much closer to the goal (m) counts as progress.
+PROGRESS_M = 0.1
+#: Within this distance of the goal (m), a direct approach (turn toward it at FINAL_TURN_GAIN x bearing, at
+#: most FINAL_TURN_RADPS, drive once within FINAL_DRIVE_RAD of it at FINAL_SPEED_GAIN x distance) replaces
+#: the window, if safe.
+FINAL_APPROACH_M = 1.0
+FINAL_TURN_GAIN = 1.5
+FINAL_TURN_RADPS = 1.0
+FINAL_SPEED_GAIN = 1.0
+FINAL_DRIVE_RAD = 0.5
+#: Recovery: back up at this speed for this long (if the rear is clear), then turn in place at this rate
+#: for this long toward the side not tried last time (if turning is safe).
+BACKUP_SPEED_MPS = 0.15
+BACKUP_S = 1.0
+RECOVERY_TURN_RADPS = 0.8
+RECOVERY_TURN_S = 2.0
+
+
+@dataclasses.dataclass(frozen=True)
+class Step:
+    """One decision of :class:`Navigator`: the state, the command (m/s, rad/s), why, and the plan if one
+    was made (None while recovering, reached or failed)."""
+    state: NavState
+    linear_x: float
+    angular_z: float
+    reason: str
+    plan: object = None
+
+
+class Navigator:
+    """GOAL_SEEKING / AVOIDING / RECOVERING / REACHED / FAILED over :func:`plan`, advanced by :meth:`update`
+    with injected time, the pose in odom and the newest scan.
+
+    With a goal (odom, m) it heads there and is REACHED within ``goal_tolerance`` (then zero). Without one it
+    holds the heading it started with (the lesson's "resume the original direction"): it aims
+    ``hold_lookahead`` ahead of itself along the start heading, so after an obstacle it turns back to that
+    heading (on a line beside the first one), and it never reaches anything; the way round keeps within
+    ``hold_corridor`` of that line, so a wall across the whole way is a block it stops at, not a thing to
+    go round. No progress toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (back up
+    if the rear is clear, turn in place toward the other side than last time if that is safe, then seek
+    again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
+    """
+
+    def __init__(self, settings, start_pose, goal_xy=None, on_transition=None):
+        self.settings = settings
+        self._start = start_pose            # (x, y, yaw) in odom: the line held without a goal
+        self._on_transition = on_transition
+        self.state = NavState.GOAL_SEEKING
+        self._side = 1.0
+        self._memory = ScanMemory(settings.memory_time)
+        self._turning = 0.0          # the way of the last turn in place, while it goes on
+        self._command = None         # the command of the last step, (m/s, rad/s)
+        self._remembered_scan = None
+        self._scanned = None         # its points in the robot's frame
+        self.set_goal(goal_xy)
+
+    def set_goal(self, goal_xy, now_s=None):
+        """Head for ``goal_xy`` (odom, m) from now; None: hold the start heading."""
+        if goal_xy is not None:
+            check_finite('goal', *goal_xy)
+        self.goal = None if goal_xy is None else (float(goal_xy[0]), float(goal_xy[1]))
+        self._best = None
+        self._progress_s = now_s     # the last progress (give_up_timeout counts from it)
+        self._stuck_from_s = now_s   # the last progress or the end of the last recovery (stuck_timeout)
+        self._recovery = None
+        self._command = None         # the first step is taken from the measured speed
+        if self.state is not NavState.GOAL_SEEKING and now_s is not None:
+            self._enter(NavState.GOAL_SEEKING, now_s, 'new goal')
+
+    def reconfigure(self, settings):
+        self.settings = settings
+        self._memory.memory_s = settings.memory_time
+
+    def target(self, pose):
+        """The point aimed at, in the robot's frame, and the measure of progress (larger is better)."""
+        x, y, yaw = pose
+        if self.goal is not None:
+            gx, gy = self.goal
+            progress = -math.hypot(gx - x, gy - y)
+        else:
+            sx, sy, syaw = self._start
+            along = (x - sx) * math.cos(syaw) + (y - sy) * math.sin(syaw)
+            gx = x + self.settings.hold_lookahead * math.cos(syaw)
+            gy = y + self.settings.hold_lookahead * math.sin(syaw)
+            progress = along
+        dx, dy = gx - x, gy - y
+        c, s = math.cos(yaw), math.sin(yaw)
+        return (c * dx + s * dy, -s * dx + c * dy), progress
+
+    def corridor(self, pose):
+        """With no goal, the line along the start heading through the robot and ``hold_corridor``, in the
+        robot's frame (for :func:`closed_loop.control.wavefront.way`); None with a goal."""
+        if self.goal is not None:
+            return None
+        relative = self._start[2] - pose[2]
+        return (0.0, 0.0), (math.cos(relative), math.sin(relative)), self.settings.hold_corridor
+
+    def update(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
+        """The :class:`Step` for now: ``pose`` (x, y, yaw) in odom, speeds (m/s, rad/s), the newest scan."""
+        step = self._decide(now_s, pose, v0, w0, scan, laser_pose, footprint)
+        self._command = (step.linear_x, step.angular_z)   # the next step is taken from it
+        return step
+
+    def _decide(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
+        check_finite('now_s', now_s)
+        check_finite('pose', *pose)
+        s = self.settings
+        if self.state in (NavState.REACHED, NavState.FAILED):
+            return Step(self.state, 0.0, 0.0, self.state.name.lower())
+        goal_local, progress = self.target(pose)
+        if self.goal is not None and math.hypot(*goal_local) <= s.goal_tolerance:
+            self._enter(NavState.REACHED, now_s, 'within %.2f m of the goal' % math.hypot(*goal_local))
+            return Step(self.state, 0.0, 0.0, 'reached')
+        if self._progress_s is None or self._best is None or progress > self._best + PROGRESS_M \
+                or now_s < self._progress_s:
+            self._best = progress if self._best is None else max(progress, self._best)
+            self._progress_s = self._stuck_from_s = now_s
+        stalled = now_s - self._progress_s
+        if stalled >= s.give_up_timeout:
+            self._enter(NavState.FAILED, now_s, 'no progress for %.1f s (give_up_timeout)' % stalled)
+            return Step(self.state, 0.0, 0.0, 'failed')
+        if self.state is NavState.RECOVERING:
+            step = self._recover(now_s, v0, w0, scan, laser_pose, footprint)
+            if step is not None:
+                return step
+        elif now_s - self._stuck_from_s >= s.stuck_timeout:
+            self._recovery = {'started_s': now_s, 'side': self._side}
+            self._side = -self._side
+            self._enter(NavState.RECOVERING, now_s, 'no progress for %.1f s (stuck_timeout)' % stalled)
+            step = self._recover(now_s, v0, w0, scan, laser_pose, footprint)
+            if step is not None:
+                return step
+        if scan is not self._remembered_scan:
+            self._remembered_scan, self._scanned = scan, scan_points(scan, laser_pose)
+            self._memory.add(now_s, pose, self._scanned, scan, laser_pose)
+        if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
+            step = self._final_approach(now_s, goal_local, v0, w0, scan, laser_pose, footprint)
+            if step is not None:
+                return step
+        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
+                 self._scanned, self._command, self.corridor(pose))
+        self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
+        state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
+        self._enter(state, now_s, p.reason)
+        return Step(state, p.linear_x, p.angular_z, p.reason, p)
+
+    def _final_approach(self, now_s, goal_local, v0, w0, scan, laser_pose, footprint):
+        """The last metre, where the window's coarse speeds would circle the goal: turn toward it, and drive
+        at it slower the closer it is, if that path keeps the margin (judged exactly); else None."""
+        s = self.settings
+        distance, bearing = math.hypot(*goal_local), math.atan2(goal_local[1], goal_local[0])
+        w = max(-FINAL_TURN_RADPS, min(FINAL_TURN_RADPS, s.max_yaw_rate, FINAL_TURN_GAIN * bearing))
+        v = 0.0 if abs(bearing) > FINAL_DRIVE_RAD else min(s.max_speed, FINAL_SPEED_GAIN * distance) * math.cos(bearing)
+        steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel + 1.0) / PREDICTION_STEP_S))
+        poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
+        if path_clearance(self._scanned, footprint, poses) < s.safety_margin:
+            return None
+        period_s = 1.0 / s.rate_hz
+        # One period's step toward (v, w), as the window's (local_planner.step_toward).
+        prev_v, prev_w = (None, None) if self._command is None else self._command
+        v = step_toward(v, prev_v, v0, s.accel, period_s, s.max_speed)
+        w = step_toward(w, prev_w, w0, s.yaw_accel, period_s, s.max_yaw_rate)
+        why = 'final approach to the goal %.2f m away' % distance
+        self._turning = 0.0
+        self._enter(NavState.GOAL_SEEKING, now_s, why)
+        return Step(NavState.GOAL_SEEKING, v, w, why)
+
+    def _recover(self, now_s, v0, w0, scan, laser_pose, footprint):
+        """The recovery's command now, or None when it is over (then seek again, with a fresh timer)."""
+        s = self.settings
+        elapsed = now_s - self._recovery['started_s']
+        points = scan_points(scan, laser_pose)
+        now_clear = footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
+
+        def safe(v, w, seconds):
+            poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, seconds,
+                            int(math.ceil((seconds + 1.0) / PREDICTION_STEP_S)))[0]
+            clearance = path_clearance(points, footprint, poses)
+            return clearance >= s.safety_margin or clearance >= now_clear - 1e-3
+        if elapsed < BACKUP_S:
+            if rear_seen(scan, laser_pose) and safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
+                return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
+            self._recovery['started_s'] = now_s - BACKUP_S   # the rear is not clear: go on to the turn
+            elapsed = BACKUP_S
+        if elapsed < BACKUP_S + RECOVERY_TURN_S:
+            w = self._recovery['side'] * RECOVERY_TURN_RADPS
+            if safe(0.0, w, min(s.horizon, BACKUP_S + RECOVERY_TURN_S - elapsed)):
+                return Step(NavState.RECOVERING, 0.0, w, 'turning to try the other side')
+        self._recovery = None
+        self._stuck_from_s = now_s
+        self._enter(NavState.GOAL_SEEKING, now_s, 'recovery done')
+        return None
+
+    def _enter(self, state, now_s, why):
+        if state is not self.state:
+            old, self.state = self.state, state
+            if self._on_transition is not None:
+                self._on_transition(old, state, now_s, why)

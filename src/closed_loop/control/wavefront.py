@@ -1,0 +1,215 @@
+"""Which way around: a navigation function over the newest scan, for the local planner's aim.
+
+The dynamic window (``closed_loop.control.local_planner``) judges commands over a couple of seconds; alone, it
+steers toward the goal's bearing and can wander into a pocket that the goal's direction leads into. So the
+aim it scores toward is not the goal itself but a point about ``aim_m`` along the shortest way to the goal
+through the free space the scan shows (Brock and Khatib's global dynamic window, 1999, with the scan as
+the map):
+
+- a grid of ``CELL_M`` cells over the box around the robot and the goal (plus ``BOX_MARGIN_M``; a goal
+  beyond ``MAX_BOX_M`` is brought in along its bearing, to the box's edge);
+- a cell is passable when it is at least the robot's half-width plus the margin from every scan point (so
+  a gap narrower than the robot plus its margins is closed; space the scan does not see counts as free);
+- a breadth-first wave from the goal over passable cells, alternating 4- and 8-neighbour steps, which
+  gives the octagonal distance (within 8% of the Euclidean), stopped once it has covered the robot;
+- from the robot (or the passable cell nearest to it, within ``START_SEARCH_M``) down the wave, up to
+  ``aim_m``, as far as the way stays in a straight line of sight of the robot through passable cells;
+  where the straight line to the goal is passable all the way, that line is the way (no wave), and the
+  aim is on it exactly. The grid is placed with the robot at a cell's centre.
+
+A ``corridor`` (a line through the goal, and a half-width) closes every cell farther from the line than
+that, and where the goal cannot be reached within it, the goal moves back along the line to the farthest
+point that can: the navigator with no goal goes round what stands on its line, and up to a wall across the
+whole way, not round it.
+
+No way through (the scan shows the goal closed off) leaves the goal as the aim; the state machine above
+handles a robot that gets nowhere. Free of ROS.
+"""
+import collections
+import math
+
+import cv2
+import numpy
+
+CELL_M = 0.2
+FINE = 2
+BOX_MARGIN_M = 3.0
+MAX_BOX_M = 20.0
+START_SEARCH_M = 0.8
+_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+_SQUARE = numpy.ones((3, 3), numpy.uint8)
+_NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
+
+#: What :func:`way` found: the point to steer for, and the goal the way leads to (the goal given, or the
+#: point a corridor's line is closed off at), both (x, y) in the robot's frame.
+Way = collections.namedtuple('Way', 'aim goal')
+
+
+def _box(goal_xy):
+    """(x0, y0, columns, rows) of the grid around the robot (the origin) and the goal, capped."""
+    gx, gy = goal_xy
+    distance = math.hypot(gx, gy)
+    reach = MAX_BOX_M - 2 * BOX_MARGIN_M
+    if distance > reach:
+        gx, gy = gx * reach / distance, gy * reach / distance
+    x0, x1 = min(0.0, gx) - BOX_MARGIN_M, max(0.0, gx) + BOX_MARGIN_M
+    y0, y1 = min(0.0, gy) - BOX_MARGIN_M, max(0.0, gy) + BOX_MARGIN_M
+    # Moved out to where the robot is at a cell's centre, so the way starts where the robot is.
+    x0, y0 = -CELL_M * (math.ceil(-x0 / CELL_M) + 0.5), -CELL_M * (math.ceil(-y0 / CELL_M) + 0.5)
+    return x0, y0, int(math.ceil((x1 - x0) / CELL_M)), int(math.ceil((y1 - y0) / CELL_M)), (gx, gy)
+
+
+def aim(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
+    """The point (x, y) in the robot's frame to steer for, or None when the points show no way to the goal
+    (:func:`way`'s ``aim``)."""
+    found = way(points, goal_xy, half_width_m, aim_m, sight_m, corridor)
+    return None if found is None else found.aim
+
+
+def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
+    """The :class:`Way` to the goal, or None when the points show none.
+
+    ``points``: (N, 2) obstacle points in the robot's frame (the scan's, and those remembered of recent
+    scans); ``goal_xy``: the goal there; ``half_width_m``: how far a passable cell must be from every
+    point (the robot's half-width plus the margin); ``sight_m``: the room a straight line to the aim must
+    keep (default ``half_width_m``; the robot's half-width alone lets the aim round a corner the way
+    itself keeps the margin from); ``corridor``: ((x, y) a point of a line through the goal, (dx, dy) its
+    unit direction, half-width m), all in the robot's frame: the way stays within the half-width of that
+    line, to the goal or, if it is closed off, to the farthest point of the line before it that is not."""
+    x0, y0, cols, rows, (gx, gy) = _box(goal_xy)
+    # The room at each cell's centre, read from a distance transform FINE times finer (accurate to a fine
+    # cell's half-diagonal, where the coarse grid alone would be off by up to 0.14 m).
+    fine = CELL_M / FINE
+    occupied = numpy.full((rows * FINE, cols * FINE), 255, numpy.uint8)
+    if len(points):
+        j = ((points[:, 0] - x0) / fine).astype(numpy.intp)
+        i = ((points[:, 1] - y0) / fine).astype(numpy.intp)
+        inside = (i >= 0) & (i < rows * FINE) & (j >= 0) & (j < cols * FINE)
+        occupied[i[inside], j[inside]] = 0
+    # A 5x5 mask is within 2% of the exact distance, at a third of the cost; the aim is guidance, not safety.
+    room = cv2.distanceTransform(occupied, cv2.DIST_L2, cv2.DIST_MASK_5)[FINE // 2::FINE, FINE // 2::FINE]
+    passable = room * fine >= half_width_m
+    if corridor is not None:
+        (px, py), (dx, dy), half = corridor
+        xs = x0 + (numpy.arange(cols) + 0.5) * CELL_M - px
+        ys = y0 + (numpy.arange(rows) + 0.5) * CELL_M - py
+        passable &= numpy.abs(dx * ys[:, None] - dy * xs[None, :]) <= half
+    in_sight = passable if sight_m is None else room * fine >= sight_m
+    goal_cell = (int((gy - y0) / CELL_M), int((gx - x0) / CELL_M))
+    here = (int(-y0 / CELL_M), int(-x0 / CELL_M))
+    start = _nearest_passable(passable, here)
+    if start is None:
+        return None
+    if corridor is not None:
+        cell, point = _farthest_on_line(passable, start, corridor, (x0, y0), (gx, gy))
+        if cell is None:
+            return None
+        if cell != goal_cell:
+            goal_cell, (gx, gy) = cell, point
+            goal_xy = (gx, gy)
+            if _in_sight(in_sight, start, cell):
+                return Way(goal_xy, goal_xy)     # straight up to where the line is closed off
+    if not passable[goal_cell]:
+        return None
+    goal = goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
+    if start == here and _in_sight(passable, start, goal_cell):
+        # The straight line is the way: the aim is on it, exactly (not at a cell's centre).
+        scale = min(1.0, aim_m / max(math.hypot(*goal), 1e-9))
+        return Way((goal[0] * scale, goal[1] * scale), tuple(goal))
+    # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter; ``count`` adds one
+    # per round to every cell reached, so a cell reached in round m (the goal in round 0) ends with
+    # rounds + 1 - m, from which its step count is read back.
+    left = passable.astype(numpy.uint8)
+    left[goal_cell] = 0
+    seen = numpy.zeros((rows, cols), numpy.uint8)
+    seen[goal_cell] = 1
+    count = seen.copy()
+    front = seen.copy()
+    k = 0
+    while not seen[start]:
+        k += 1
+        if k >= 254:
+            return None
+        grown = cv2.dilate(front, _SQUARE if k % 2 else _CROSS)
+        cv2.bitwise_and(grown, left, dst=grown)
+        if not cv2.countNonZero(grown):
+            return None
+        cv2.subtract(left, grown, dst=left)
+        cv2.bitwise_or(seen, grown, dst=seen)
+        cv2.add(count, seen, dst=count)
+        front = grown
+    steps = numpy.where(seen > 0, k + 1 - count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
+    # Down the wave from the start, aim_m of path. Many ways are equally short on a grid; of the steps down,
+    # the one nearest to the goal in a straight line is taken, so in the open the aim is on the goal's line.
+    i, j = start
+    gi, gj = goal_cell
+    travelled = 0.0
+    aim_cell = start
+    while steps[i, j] > 0 and travelled < aim_m:
+        best = None
+        for di, dj in _NEIGHBOURS:
+            ni, nj = i + di, j + dj
+            if 0 <= ni < rows and 0 <= nj < cols and steps[ni, nj] < steps[i, j]:
+                key = (steps[ni, nj], (gi - ni) ** 2 + (gj - nj) ** 2)
+                if best is None or key < best[0]:
+                    best = (key, ni, nj)
+        if best is None:
+            break
+        _, ni, nj = best
+        travelled += CELL_M * math.hypot(ni - i, nj - j)
+        i, j = ni, nj
+        # The aim is the farthest point of the way in sight of the start through passable cells: steering
+        # for a point beyond a bend would cut the corner into what the way goes round.
+        if not _in_sight(in_sight, start, (i, j)):
+            break
+        aim_cell = (i, j)
+    if steps[aim_cell] == 0:
+        return Way(tuple(goal), tuple(goal))
+    return Way((x0 + (aim_cell[1] + 0.5) * CELL_M, y0 + (aim_cell[0] + 0.5) * CELL_M), tuple(goal))
+
+
+def _farthest_on_line(passable, start, corridor, origin, goal_xy):
+    """The cell and the point (x, y) of the goal, or of the farthest point before it on the corridor's line
+    (from the robot's projection on it) that passable cells connect to ``start``; (None, None) if none
+    does."""
+    (px, py), (dx, dy), _ = corridor
+    x0, y0 = origin
+    rows, cols = passable.shape
+    _, labels = cv2.connectedComponents(passable.astype(numpy.uint8), connectivity=8)
+    region = labels[start]
+    along = (goal_xy[0] - px) * dx + (goal_xy[1] - py) * dy
+    nearest = -(px * dx + py * dy)        # the robot's projection on the line
+    for t in numpy.arange(along, min(nearest, along) - 1e-9, -0.5 * CELL_M):
+        i, j = int((py + t * dy - y0) / CELL_M), int((px + t * dx - x0) / CELL_M)
+        if 0 <= i < rows and 0 <= j < cols and passable[i, j] and labels[i, j] == region:
+            return (i, j), (float(px + t * dx), float(py + t * dy))
+    return None, None
+
+
+def _in_sight(passable, a, b):
+    """True if every cell on the straight line from cell ``a`` to cell ``b`` is passable."""
+    n = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 2
+    if n == 0:
+        return True
+    t = numpy.arange(n + 1) / n
+    ii = numpy.round(a[0] + (b[0] - a[0]) * t).astype(numpy.intp)
+    jj = numpy.round(a[1] + (b[1] - a[1]) * t).astype(numpy.intp)
+    return bool(passable[ii, jj].all())
+
+
+def _nearest_passable(passable, cell):
+    """The passable cell nearest to ``cell`` within START_SEARCH_M, or None."""
+    i, j = cell
+    if 0 <= i < passable.shape[0] and 0 <= j < passable.shape[1] and passable[i, j]:
+        return cell
+    reach = int(math.ceil(START_SEARCH_M / CELL_M))
+    rows, cols = passable.shape
+    best = None
+    for di in range(-reach, reach + 1):
+        for dj in range(-reach, reach + 1):
+            ni, nj = i + di, j + dj
+            if 0 <= ni < rows and 0 <= nj < cols and passable[ni, nj]:
+                d = di * di + dj * dj
+                if best is None or d < best[0]:
+                    best = (d, (ni, nj))
+    return None if best is None else best[1]

@@ -1,0 +1,139 @@
+"""Obstacle shapes in one place: how each is seen from above and how pybullet builds it.
+
+An obstacle is a vertical prism: a box (walls are boxes) or a cylinder. :data:`SHAPES` maps the
+obstacle's ``shape`` to a class that gives, for one obstacle at its time-0 position, the signed distance
+from a point to its footprint, whether a robot's rectangle overlaps it, and its pybullet collision and
+visual shapes. World checks, the demo's clearance report and the simulator all go through this table, so
+a new shape is one class here. Each also casts planar rays at a group of its obstacles
+(``ray_distances``), for the LIDAR's planar ray caster (``closed_loop.sim.planar_rays``).
+"""
+import math
+
+import numpy
+
+
+def _corners(cx, cy, yaw, x_min, x_max, y_min, y_max):
+    c, s = math.cos(yaw), math.sin(yaw)
+    return [(cx + c * x - s * y, cy + s * x + c * y) for x, y in
+            ((x_min, y_min), (x_max, y_min), (x_max, y_max), (x_min, y_max))]
+
+
+def separated(a, b):
+    """True if convex polygons ``a`` and ``b`` (corner lists) have a separating axis (an edge normal)."""
+    for poly in (a, b):
+        for i in range(len(poly)):
+            (x1, y1), (x2, y2) = poly[i], poly[(i + 1) % len(poly)]
+            nx, ny = y2 - y1, x1 - x2
+            pa = [nx * x + ny * y for x, y in a]
+            pb = [nx * x + ny * y for x, y in b]
+            if max(pa) <= min(pb) or max(pb) <= min(pa):
+                return True
+    return False
+
+
+def robot_corners(pose, rect):
+    """The corners of a robot's rectangle ``rect`` = (x_min, x_max, y_min, y_max), in its frame, at ``pose``."""
+    return _corners(pose.x, pose.y, pose.yaw, *rect)
+
+
+class Box:
+    """A box, rotated by ``yaw`` about its centre: ``size`` is (x, y, z) full extents."""
+
+    @staticmethod
+    def distance(obstacle, x_m, y_m):
+        c, s = math.cos(obstacle.yaw), math.sin(obstacle.yaw)
+        dx, dy = x_m - obstacle.position[0], y_m - obstacle.position[1]
+        qx = abs(c * dx + s * dy) - 0.5 * obstacle.size[0]
+        qy = abs(-s * dx + c * dy) - 0.5 * obstacle.size[1]
+        return math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0)
+
+    @staticmethod
+    def overlaps_robot(obstacle, pose, rect):
+        hx, hy = 0.5 * obstacle.size[0], 0.5 * obstacle.size[1]
+        box = _corners(obstacle.position[0], obstacle.position[1], obstacle.yaw, -hx, hx, -hy, hy)
+        return not separated(robot_corners(pose, rect), box)
+
+    @staticmethod
+    def ray_params(obstacles):
+        """What :meth:`ray_distances` needs of each box, (M, 5): cos and sin of its yaw, its half-sizes, and
+        the radius of the circle round its footprint."""
+        return numpy.array([(math.cos(o.yaw), math.sin(o.yaw), 0.5 * o.size[0], 0.5 * o.size[1],
+                             0.5 * math.hypot(o.size[0], o.size[1])) for o in obstacles]).reshape(-1, 5)
+
+    @staticmethod
+    def ray_distances(params, centres, origin, dirs):
+        """(N, M) distance from ``origin`` (x, y) along each of ``dirs`` ((N, 2), unit) to each of M boxes
+        (``params`` rows of :meth:`ray_params`, centres ``centres`` (M, 2)); inf where the ray misses (or
+        starts inside)."""
+        c, s, half = params[:, 0], params[:, 1], params[:, 2:4]
+        rel = numpy.asarray(origin) - centres
+        ox, oy = c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]        # (M,) in each box
+        dx = dirs[:, :1] * c + dirs[:, 1:] * s                                        # (N, M)
+        dy = -dirs[:, :1] * s + dirs[:, 1:] * c
+        with numpy.errstate(divide='ignore', invalid='ignore'):
+            inv_x, inv_y = 1.0 / dx, 1.0 / dy
+            ax, bx = (-half[:, 0] - ox) * inv_x, (half[:, 0] - ox) * inv_x
+            ay, by = (-half[:, 1] - oy) * inv_y, (half[:, 1] - oy) * inv_y
+            near = numpy.maximum(numpy.fmin(ax, bx), numpy.fmin(ay, by))
+            far = numpy.minimum(numpy.fmax(ax, bx), numpy.fmax(ay, by))
+        return numpy.where((near <= far) & (near >= 0.0), near, numpy.inf)
+
+    @staticmethod
+    def pybullet_shapes(obstacle, call, pybullet):
+        half = [0.5 * s for s in obstacle.size]
+        return (call(pybullet.createCollisionShape, pybullet.GEOM_BOX, halfExtents=half),
+                call(pybullet.createVisualShape, pybullet.GEOM_BOX, halfExtents=half,
+                     rgbaColor=list(obstacle.color)))
+
+
+class Cylinder:
+    """An upright cylinder of ``radius``; ``size`` is (2 r, 2 r, height)."""
+
+    @staticmethod
+    def distance(obstacle, x_m, y_m):
+        return math.hypot(x_m - obstacle.position[0], y_m - obstacle.position[1]) - obstacle.radius
+
+    @staticmethod
+    def overlaps_robot(obstacle, pose, rect):
+        x_min, x_max, y_min, y_max = rect
+        c, s = math.cos(pose.yaw), math.sin(pose.yaw)
+        dx, dy = obstacle.position[0] - pose.x, obstacle.position[1] - pose.y
+        lx, ly = c * dx + s * dy, -s * dx + c * dy
+        gap = math.hypot(max(x_min - lx, 0.0, lx - x_max), max(y_min - ly, 0.0, ly - y_max))
+        return gap < obstacle.radius
+
+    @staticmethod
+    def ray_params(obstacles):
+        """(M, 1): each cylinder's radius (also that of the circle round its footprint, the last column)."""
+        return numpy.array([(o.radius,) for o in obstacles]).reshape(-1, 1)
+
+    @staticmethod
+    def ray_distances(params, centres, origin, dirs):
+        """As :meth:`Box.ray_distances`, for cylinders."""
+        radius = params[:, 0]
+        rel = centres - numpy.asarray(origin)                      # (M, 2) from the origin
+        b = dirs @ rel.T                                            # (N, M) along each ray to the closest point
+        disc = b * b - ((rel * rel).sum(axis=1) - radius * radius)
+        t = b - numpy.sqrt(numpy.maximum(disc, 0.0))
+        return numpy.where((disc >= 0.0) & (t >= 0.0), t, numpy.inf)
+
+    @staticmethod
+    def pybullet_shapes(obstacle, call, pybullet):
+        return (call(pybullet.createCollisionShape, pybullet.GEOM_CYLINDER, radius=obstacle.radius,
+                     height=obstacle.size[2]),
+                call(pybullet.createVisualShape, pybullet.GEOM_CYLINDER, radius=obstacle.radius,
+                     length=obstacle.size[2], rgbaColor=list(obstacle.color)))
+
+
+#: obstacle.shape -> its class.
+SHAPES = {'box': Box, 'cylinder': Cylinder}
+
+
+def bounding_radius(obstacle):
+    """The radius (m) of a circle round the obstacle's footprint, about its centre."""
+    return obstacle.radius if obstacle.shape == 'cylinder' else 0.5 * math.hypot(obstacle.size[0], obstacle.size[1])
+
+
+def distance(obstacle, x_m, y_m):
+    """Signed distance (m) from the point to the obstacle's footprint: negative inside."""
+    return SHAPES[obstacle.shape].distance(obstacle, x_m, y_m)
