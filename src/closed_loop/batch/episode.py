@@ -27,8 +27,11 @@ import math
 import time
 from typing import Optional
 
+import cv2
+
 from closed_loop.sim import clutter
 from closed_loop.commands import validate_command
+from closed_loop.control.vision import VisionSettings, detect_red
 from closed_loop.controllers import Context, ControllerError, Odom, controller_class
 from closed_loop.geometry import quaternion_yaw
 from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
@@ -242,8 +245,9 @@ def run_episode(spec, cache=None):
             camera_pose = p.profile.laser_pose(rig.sim.model.names.camera_frame)
         except ValueError:
             camera_pose = None
-        controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, (0.0, 0.0, 0.0),
-                                                            p.goal_odom, camera_pose), *p.extra_settings)
+        controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, p.goal_odom,
+                                                            camera_pose), *p.extra_settings)
+        controller.record_timings = True
         result = _loop(spec, rig, controller, p.goal_world)
     finally:
         rig.close()
@@ -266,6 +270,8 @@ def _loop(spec, rig, controller, goal_world):
     if camera is not None:
         steps_per_frame = max(1, int(round(camera.period_s / dt)))
         frame_phase = int(round(camera.offset_s / dt)) % steps_per_frame
+        vision = VisionSettings()
+        controller.on_camera_info(camera.intrinsics.fx, camera.intrinsics.cx, camera.intrinsics.width)
     pending = []                      # (step, command), in order
     contacts, touching, clearance, path_m, peak_decel = 0, set(), math.inf, 0.0, 0.0
     pose, _ = sim.ground_truth()
@@ -285,9 +291,13 @@ def _loop(spec, rig, controller, goal_world):
                         lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
             sent = controller.on_scan(now, scan, odom)
         if frame_due:
-            controller.on_frame(now, camera.sample(sim), camera.intrinsics, odom)
+            # What vision_node does in the graph: a red_centroid only for a frame with red in it.
+            found = detect_red(cv2.cvtColor(camera.sample(sim), cv2.COLOR_RGB2BGR), vision)
+            if found.detected:
+                controller.on_detection(found.centroid_px[0], now, odom)
         if k % steps_per_tick == phase:
             sent = controller.on_tick(now, odom)
+            controller.take_transitions()       # what the node logs; an episode keeps only the mode
             pose, (linear, angular) = sim.ground_truth()
             x, y = pose.position[:2]
             yaw = quaternion_yaw(pose.orientation)

@@ -3,18 +3,17 @@
 The lesson's rule (stop under 0.5 m, slow to 0.2 m/s under 1.0 m, else 0.5 m/s) is kept, with three
 additions: a reading that is missing, stale or untrusted means stop; leaving a zone needs the distance
 to clear its limit by a hysteresis margin, so sensor noise at a boundary cannot make the robot
-stutter; and a silence watchdog on the wall clock, for when simulated time itself stops.
+stutter; and the controller host's silence watchdog (``closed_loop.watchdog``) stops the robot when
+simulated time itself stops.
 """
 import dataclasses
 import enum
 import math
 import numbers
-import threading
-import time
-from typing import Callable, Optional
+from typing import Optional
 
-from closed_loop import robot_model
-from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
+from closed_loop.control.loop import LoopSettings
+from closed_loop.settings import SettingsError, param
 
 
 class DecisionError(ValueError):
@@ -28,27 +27,12 @@ class Zone(enum.IntEnum):
     STOP = 2
 
 
-#: Scans older than this are never acted on, whatever ``~scan_timeout`` says.
-MAX_SCAN_TIMEOUT_S = 5.0
-
-
 @dataclasses.dataclass
-class FrontControlSettings:
+class FrontControlSettings(LoopSettings):
     """The ``~parameters`` every front-scan controller shares (stop_on_obstacle, state_machine_controller)."""
     front_half_angle: float = param(math.pi / 2.0, 'rad', 'half-width of the front sector, centred '
                                     'on 0 (forward)', minimum=0.0, maximum=math.pi,
                                     exclusive_minimum=True, live=True)
-    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=MIN_RATE_HZ)
-    scan_timeout: float = param(0.5, 's', 'stop when the newest scan is older than this (or none '
-                                'has arrived)', minimum=0.0, maximum=MAX_SCAN_TIMEOUT_S,
-                                exclusive_minimum=True)
-    scan_frame: str = param(robot_model.SCAN_FRAME, '', "the laser's frame_id: scans in any other "
-                            'frame are refused (stop)')
-
-    @property
-    def watchdog_period_s(self):
-        """How often the silence watchdog looks: a control period, or half the timeout if that is shorter."""
-        return min(1.0 / self.rate_hz, 0.5 * self.scan_timeout)
 
 
 @dataclasses.dataclass
@@ -195,80 +179,3 @@ def react_now(reading, reading_age_s, previous_zone, settings):
     if not settings.react_immediately:
         return False
     return decide(reading, reading_age_s, previous_zone, settings).zone > previous_zone
-
-
-class SilenceWatchdog:
-    """Calls ``on_silence(silent_s)`` every ``period_s`` while nothing has arrived for ``timeout_s``.
-
-    It runs on a monotonic wall clock in a daemon thread, so it keeps working when simulated time
-    stops (a dead simulator also stops ``/clock``, and timers on the ROS clock then never fire).
-    :meth:`kick` records an arrival; the time before the first kick counts from construction. A stall
-    of this process (the thread wakes more than a period late) is not silence: it is left out.
-    ``clock`` (s) is injectable for tests.
-    """
-
-    def __init__(self, timeout_s, period_s, on_silence, clock=time.monotonic):
-        # type: (float, float, Callable[[float], None], Callable[[], float]) -> None
-        for name, value in (('timeout_s', timeout_s), ('period_s', period_s)):
-            if not (isinstance(value, numbers.Real) and math.isfinite(value) and value > 0):
-                raise DecisionError('%s: expected a positive finite number of s, got %r'
-                                    % (name, value))
-        self._timeout_s = timeout_s
-        self._period_s = period_s
-        self._on_silence = on_silence
-        self._clock = clock
-        self._lock = threading.Lock()
-        self._last_arrival_s = clock()
-        self._stopped = threading.Event()
-        self._thread = None  # type: Optional[threading.Thread]
-
-    def kick(self):
-        """Record that input arrived now."""
-        with self._lock:
-            self._last_arrival_s = self._clock()
-
-    def silent_for(self):
-        """Seconds since the last arrival (or since construction)."""
-        with self._lock:
-            return self._clock() - self._last_arrival_s
-
-    def check(self):
-        """Call ``on_silence`` if the silence exceeds ``timeout_s``; return the silence (s) or None."""
-        silent = self.silent_for()
-        if silent > self._timeout_s:
-            self._on_silence(silent)
-            return silent
-        return None
-
-    def start(self):
-        """Start checking every ``period_s`` in a daemon thread."""
-        self._thread = threading.Thread(target=self._run, name='silence_watchdog', daemon=True)
-        self._thread.start()
-
-    def stop(self, join_timeout_s=0.0):
-        """Stop the thread; wait up to ``join_timeout_s`` for it (it ends within one period)."""
-        self._stopped.set()
-        if self._thread is not None and join_timeout_s > 0.0:
-            self._thread.join(join_timeout_s)
-
-    @property
-    def running(self):
-        """True while the checking thread is alive."""
-        return self._thread is not None and self._thread.is_alive()
-
-    def discount(self, stalled_s):
-        """Do not count ``stalled_s`` seconds, in which this process itself was not running, as silence."""
-        with self._lock:
-            self._last_arrival_s += max(0.0, stalled_s)
-
-    def _run(self):
-        woke = self._clock()
-        while not self._stopped.wait(self._period_s):
-            now = self._clock()
-            slept, woke = now - woke, now
-            # Woken a whole period late: the process (or the machine) was stalled, and the input that
-            # came meanwhile still waits in the socket for its callbacks. Judging now would stop the
-            # robot for silence that was ours; the stall is left out and the next period judges.
-            if slept > 2.0 * self._period_s:
-                self.discount(slept - self._period_s)
-            self.check()

@@ -63,7 +63,8 @@ class FusionNavigator:
         self._last_scan = None
         self._detection = None           # (pixel column or None, frame stamp s, robot pose at the frame)
         self.opinions = ()
-        #: The wall time (ms) of each scan's tracking, association and beliefs, for benchmarks.
+        #: The wall time (ms) of each scan's tracking, association and beliefs, when ``record_timings`` is set.
+        self.record_timings = False
         self.fusion_ms = []
 
     @property
@@ -98,7 +99,8 @@ class FusionNavigator:
                 reach = self.wait_settings.unknown_look_ahead if kind is Belief.UNKNOWN else None
                 opinions.append(Opinion(t, kind, why, in_path(t, pose, half_width, now_s, self.wait_settings, reach)))
             self.opinions = tuple(opinions)
-            self.fusion_ms.append((time.perf_counter() - started) * 1e3)
+            if self.record_timings:
+                self.fusion_ms.append((time.perf_counter() - started) * 1e3)
         blocking = [o for o in self.opinions if o.in_path and o.belief is not Belief.STATIC]
         if self.navigator.state in (NavState.REACHED, NavState.FAILED):
             blocking = []

@@ -12,22 +12,17 @@ import math
 
 import numpy
 
-from closed_loop import robot_model
 from closed_loop.control.guard import footprint_clearance, path_clearance, scan_points
 from closed_loop.control.local_planner import PREDICTION_STEP_S, check_finite, plan, predict, step_toward
 from closed_loop.control.scan import sample_angles
 from closed_loop.control.scan_memory import ScanMemory
-from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
+from closed_loop.control.loop import LoopSettings
+from closed_loop.settings import SettingsError, param
 
 
 @dataclasses.dataclass
-class NavigatorSettings:
+class NavigatorSettings(LoopSettings):
     """avoid_obstacles' ``~parameters``; the speed and acceleration limits come from the robot profile."""
-    rate_hz: float = param(10.0, 'Hz', 'control timer rate (ROS clock)', minimum=MIN_RATE_HZ)
-    scan_timeout: float = param(0.5, 's', 'stop when the newest scan (or odometry) is older than this',
-                                minimum=0.0, maximum=5.0, exclusive_minimum=True)
-    scan_frame: str = param(robot_model.SCAN_FRAME, '', "the laser's frame_id: scans in any other frame are "
-                            'refused (stop)')
     max_speed: float = param(0.5, 'm/s', 'forward speed limit', minimum=0.0, exclusive_minimum=True, live=True)
     max_yaw_rate: float = param(1.5, 'rad/s', 'turn rate limit', minimum=0.0, exclusive_minimum=True, live=True)
     accel: float = param(1.0, 'm/s^2', 'linear acceleration and braking the plan counts on', minimum=0.05,
@@ -102,16 +97,6 @@ def in_danger(sent, scan_points_xy, settings, footprint):
     steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
     poses = predict(v, w, [v], [w], s, s.horizon, steps)
     return path_clearance(scan_points_xy, footprint, poses[0]) < s.safety_margin
-
-
-def stale_input(now_s, scan_stamp_s, odom_stamp_s, scan_timeout_s):
-    """Why the newest scan or odometry cannot be acted on (older, or stamped later, than
-    ``scan_timeout_s``), or None."""
-    for name, stamp in (('scan', scan_stamp_s), ('odometry', odom_stamp_s)):
-        age = now_s - stamp
-        if age > scan_timeout_s or age < -scan_timeout_s:
-            return '%s is %.2f s old (scan_timeout %.2f s)' % (name, age, scan_timeout_s)
-    return None
 
 
 class NavState(enum.Enum):

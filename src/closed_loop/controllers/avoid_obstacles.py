@@ -1,11 +1,33 @@
-"""avoid_obstacles' core (the navigator), as ``closed_loop.nodes.avoid_obstacles`` drives it."""
+"""avoid_obstacles: the reactive navigator (``closed_loop.control.navigator``), the lesson's first exercise.
+
+It goes to a goal around obstacles with the robot's footprint, or, with no goal, holds its start heading.
+The goal is ``goal_x``, ``goal_y`` (odom, m) where given, else ``goal_distance`` ahead of where it starts
+(0: none), and a new one may come at any time (``move_base_simple/goal``). The navigator starts at the
+first odometry. A scan that makes the command being followed unsafe (its predicted path now comes within
+``safety_margin`` of the scan) is acted on at once. A missing or stale scan or odometry (older than
+``scan_timeout``) means zero. Its mode: GOAL_SEEKING, AVOIDING, RECOVERING, REACHED or FAILED.
+
+Drawings: ``plan`` (in the base frame: the chosen arc coloured by what it is, every candidate's end, blue
+if safe and red if not, and the point the arcs were scored toward) and ``goal`` (the goal being followed).
+"""
+import math
 import time
 
-from closed_loop.controllers import Controller
+from closed_loop.control.drawing import Drawing, Goal, Shape
 from closed_loop.control.guard import scan_points
 from closed_loop.control.local_planner import NavigatorError
-from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger, stale_input
+from closed_loop.control.loop import stale_input
+from closed_loop.control.markers import arrow_end
+from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger
 from closed_loop.control.scan import ScanError, validate_scan
+from closed_loop.controllers import STOP, Controller, ControllerError
+
+PLAN_COLOURS = {'goal': (0.1, 0.85, 0.2, 1.0), 'avoid': (1.0, 0.75, 0.0, 1.0), 'turn': (1.0, 0.75, 0.0, 1.0),
+                'stop': (0.95, 0.1, 0.1, 1.0)}
+SAFE_COLOUR, UNSAFE_COLOUR = (0.3, 0.6, 1.0, 0.8), (0.95, 0.1, 0.1, 0.5)
+AIM_COLOUR = (0.6, 0.2, 0.9, 1.0)   # purple: no other display of the shipped rviz config uses it
+#: Drawn this high above the ground (m), so the plan shows over the scan's points.
+DRAW_Z_M = 0.05
 
 
 class AvoidObstacles(Controller):
@@ -13,27 +35,73 @@ class AvoidObstacles(Controller):
     settings_class = NavigatorSettings
     extra_settings_classes = (GoalSettings,)
     ends_at_rest = False
+    uses_odom = uses_goal = needs_footprint = True
+    warn_modes = (NavState.RECOVERING.name, NavState.FAILED.name)
+    outputs = {'plan': Drawing, 'goal': Goal}
 
-    def __init__(self, settings, context, *extra_settings):
+    def __init__(self, settings, context, goal_settings=None, *extra_settings):
         Controller.__init__(self, settings, context)
-        self.navigator = self.make_core(settings, context, *extra_settings)
+        self.goal_settings = goal_settings or GoalSettings()
+        self.extra_settings = extra_settings
+        self.navigator = None       # made at the first odometry, which gives the start pose
         self.scan = None
-        self.sent = (0.0, 0.0)
-        #: The wall time (ms) of each decision that planned, for benchmarks.
+        self.sent = STOP
+        self.step = None            # the last decision's navigator step
+        self._news = set()          # outputs with news since drawings() was last asked
+        #: The wall time (ms) of each decision that planned, when ``record_timings`` is set (benchmarks).
+        self.record_timings = False
         self.decision_ms = []
 
-    def make_core(self, settings, context, *extra_settings):
+    def make_core(self, start, goal):
         """What this controller drives: here the navigator (a subclass drives one with its interface)."""
-        return Navigator(settings, context.start, context.goal)
+        return Navigator(self.settings, start, goal, on_transition=self._on_transition)
 
-    def after_step(self, now_s, step):
-        """Called with each decision's step (a subclass records more from it)."""
+    @property
+    def goal(self):
+        return None if self.navigator is None else self.navigator.goal
+
+    def _start(self, now_s, odom):
+        """The navigator, from the first odometry: the start pose and the goal."""
+        goal = self.context.goal
+        if goal is None and self.goal_settings.goal_distance > 0:
+            d = self.goal_settings.goal_distance
+            goal = (odom.x + d * math.cos(odom.yaw), odom.y + d * math.sin(odom.yaw))
+        self.navigator = self.make_core((odom.x, odom.y, odom.yaw), goal)
+        self._news.add('goal')
+        self.log.info('start at (%.2f, %.2f, %.2f rad) in odom; %s' % (
+            odom.x, odom.y, odom.yaw, 'goal (%.2f, %.2f)' % goal if goal is not None
+            else 'no goal: holding the start heading'))
+
+    def set_goal(self, goal_xy, now_s):
+        if self.navigator is None:
+            raise ControllerError('no odometry yet')
+        try:
+            self.navigator.set_goal(goal_xy, now_s)
+        except NavigatorError as error:
+            raise ControllerError(str(error))
+        self._news.add('goal')
+
+    def reconfigure(self, settings):
+        Controller.reconfigure(self, settings)
+        if self.navigator is not None:
+            self.navigator.reconfigure(settings)
+
+    def _on_transition(self, old, new, now_s, why):
+        self.enter(new.name, now_s, why)
+
+    def _odometry(self, now_s, odom):
+        """Start the navigator at the first usable odometry, whichever call brings it."""
+        if self.navigator is None and odom is not None and all(math.isfinite(v) for v in odom):
+            self._start(now_s, odom)
 
     def on_scan(self, now_s, scan, odom):
-        try:
-            validate_scan(scan)
-        except ScanError:
-            scan = None
+        self._odometry(now_s, odom)
+        if scan is not None:
+            try:
+                validate_scan(scan)
+            except ScanError as error:
+                self.log.error('scan rejected: %s' % error)
+                scan = None
         self.scan = scan
         if scan is None or in_danger(self.sent, scan_points(scan, self.context.laser_pose), self.settings,
                                      self.context.footprint):
@@ -41,20 +109,64 @@ class AvoidObstacles(Controller):
         return None
 
     def on_tick(self, now_s, odom):
-        if self.scan is None or stale_input(now_s, self.scan.stamp_s, odom.stamp_s, self.settings.scan_timeout):
-            self.sent = (0.0, 0.0)
-            return self.sent
+        self._odometry(now_s, odom)
+        if self.navigator is None:
+            return self._stop('no odometry yet')
+        if self.scan is None:
+            return self._stop('no usable scan')
+        problem = stale_input(now_s, (('scan', self.scan.stamp_s), ('odometry', odom.stamp_s)),
+                              self.settings.scan_timeout)
+        if problem is not None:
+            return self._stop(problem)
         started = time.perf_counter()
         try:
             step = self.navigator.update(now_s, (odom.x, odom.y, odom.yaw), odom.v, odom.w, self.scan,
                                          self.context.laser_pose, self.context.footprint)
-        except (NavigatorError, ScanError):
-            self.sent = (0.0, 0.0)
-            return self.sent
+        except (NavigatorError, ScanError) as error:
+            return self._stop(str(error))
         if step.plan is not None:
-            self.decision_ms.append((time.perf_counter() - started) * 1e3)
+            if self.record_timings:
+                self.decision_ms.append((time.perf_counter() - started) * 1e3)
+            self._news.add('plan')
+        self.fault = None
         self.sent = (step.linear_x, step.angular_z)
-        self.mode = step.state.name
+        self.step = step
+        self.enter(step.state.name, now_s, step.reason)
         self.finished = step.state in (NavState.REACHED, NavState.FAILED)
         self.after_step(now_s, step)
         return self.sent
+
+    def _stop(self, why):
+        self.fault = why
+        self.sent = STOP
+        return STOP
+
+    def after_step(self, now_s, step):
+        """Called after each decision (a subclass keeps more from it)."""
+
+    # -- what it draws ---------------------------------------------------------------------------------------
+    def drawings(self, wanted):
+        news, self._news = self._news, set()
+        out = {}
+        if 'goal' in news and 'goal' in wanted and self.goal is not None:
+            out['goal'] = Goal(self.navigator.goal)
+        if 'plan' in news and 'plan' in wanted and self.step is not None and self.step.plan is not None:
+            out['plan'] = self.plan_drawing(self.step.plan)
+        return out
+
+    def plan_drawing(self, plan):
+        """The plan in the base frame: the chosen arc, every candidate's end, and the aim."""
+        chosen = Shape('line', 'chosen', 0, PLAN_COLOURS.get(plan.kind, PLAN_COLOURS['goal']), (0.03, 0.0, 0.0),
+                       ((0.0, 0.0, DRAW_Z_M),) + tuple((float(x), float(y), DRAW_Z_M) for x, y, _ in plan.path))
+        ends, colours = [], []
+        for v, w, _clearance, safe in plan.candidates:
+            # Where the candidate would take the robot in one horizon, drawn as a dot.
+            x, y = arrow_end(v, w, self.settings.horizon)
+            ends.append((x, y, DRAW_Z_M))
+            colours.append(SAFE_COLOUR if safe else UNSAFE_COLOUR)
+        candidates = Shape('points', 'candidates', 1, scale=(0.04, 0.04, 0.0), points=tuple(ends),
+                           colours=tuple(colours))
+        # The point the arcs were scored toward: a way round the obstacles to the goal (control.wavefront).
+        aim = Shape('sphere', 'aim', 2, AIM_COLOUR, (0.15, 0.15, 0.15),
+                    position=(float(plan.aim_xy[0]), float(plan.aim_xy[1]), DRAW_Z_M))
+        return Drawing('base', (chosen, candidates, aim))

@@ -1,0 +1,120 @@
+"""The layout holds: imports run one way (nodes -> batch -> controllers -> control; sim beside control; all on
+the shared helpers), only the nodes import rospy or message packages, the control cores never see pybullet,
+and no module grows past 400 lines. Read from the source text (every import, at any depth), so an import
+inside a function cannot hide."""
+import ast
+import os
+
+import pytest
+
+SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'src'))
+PACKAGE = 'closed_loop'
+MAX_MODULE_LINES = 400
+#: Each layer and the layers it may import (the shared helpers are the top-level modules of the package).
+ALLOWED = {
+    'helpers': {'helpers'},
+    'sim': {'helpers', 'sim'},
+    'control': {'helpers', 'control'},
+    'controllers': {'helpers', 'control', 'controllers'},
+    'batch': {'helpers', 'sim', 'control', 'controllers', 'batch'},
+    'nodes': {'helpers', 'sim', 'control', 'controllers', 'batch', 'nodes'},
+}
+#: Top-level modules that are commands of a layer rather than helpers (``python3 -m closed_loop.sweep``).
+ENTRY_POINTS = {'closed_loop.sweep': 'batch'}
+ROS_NAMES = ('rospy', 'roslib', 'rospkg', 'rosgraph', 'rosbag', 'roslaunch', 'rosnode', 'rostopic', 'genpy',
+             'tf2_ros', 'dynamic_reconfigure', 'actionlib', 'message_filters')
+ROS_SUFFIXES = ('_msgs', '_srvs')
+
+
+def modules():
+    """{dotted name: path} of every module of the package."""
+    found = {}
+    for folder, dirs, files in os.walk(os.path.join(SRC, PACKAGE)):
+        dirs[:] = [d for d in dirs if not d.startswith(('.', '__'))]
+        package = os.path.relpath(folder, SRC).replace(os.sep, '.')
+        for name in files:
+            if name.endswith('.py'):
+                found[package if name == '__init__.py' else package + '.' + name[:-3]] = os.path.join(folder, name)
+    return found
+
+
+def layer(module):
+    if module in ENTRY_POINTS:
+        return ENTRY_POINTS[module]
+    parts = module.split('.')
+    if len(parts) > 1 and os.path.isdir(os.path.join(SRC, PACKAGE, parts[1])):
+        return parts[1]
+    return 'helpers'
+
+
+def imports(module, path):
+    """Every module ``path`` imports, as absolute dotted names."""
+    tree = ast.parse(open(path).read(), path)
+    names = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names += [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            assert not node.level, '%s: a relative import; the package imports by absolute names' % path
+            base = node.module
+            names.append(base)
+            names += ['%s.%s' % (base, a.name) for a in node.names]
+    return names
+
+
+def is_ros(name):
+    top = name.split('.')[0]
+    return top in ROS_NAMES or top.endswith(ROS_SUFFIXES)
+
+
+def test_every_sub_package_says_what_it_holds_and_may_import():
+    for sub in ('sim', 'control', 'controllers', 'batch', 'nodes'):
+        with open(os.path.join(SRC, PACKAGE, sub, '__init__.py')) as f:
+            doc = ast.get_docstring(ast.parse(f.read()))
+        assert doc and ('May import' in doc or 'Free of ROS' in doc), '%s/__init__.py: say what it holds and ' \
+                                                                     'what it may import' % sub
+
+
+def test_imports_run_one_way():
+    everything = modules()
+    wrong = []
+    for module, path in sorted(everything.items()):
+        mine = layer(module)
+        for name in imports(module, path):
+            if name.split('.')[0] != PACKAGE or name not in everything:
+                continue
+            theirs = layer(name)
+            if theirs not in ALLOWED[mine]:
+                wrong.append('%s (%s) imports %s (%s)' % (module, mine, name, theirs))
+    assert not wrong, '\n'.join(wrong)
+
+
+def test_only_the_nodes_import_ros_and_the_control_cores_never_the_simulator():
+    wrong = []
+    for module, path in sorted(modules().items()):
+        mine = layer(module)
+        for name in imports(module, path):
+            if is_ros(name) and mine != 'nodes':
+                wrong.append('%s imports %s: only closed_loop.nodes may' % (module, name))
+            if name.split('.')[0] == 'pybullet' and mine in ('control', 'controllers', 'helpers'):
+                wrong.append('%s imports pybullet: only the simulator (and what drives it) may' % module)
+    assert not wrong, '\n'.join(wrong)
+
+
+def test_the_layering_is_seen_by_the_checks():
+    """The checks above can fail: a control module importing the simulator, and a core importing rospy,
+    are caught."""
+    assert layer('closed_loop.control.navigator') == 'control'
+    assert layer('closed_loop.sim.sensors.lidar') == 'sim'
+    assert layer('closed_loop.settings') == 'helpers'
+    assert layer('closed_loop.sweep') == 'batch'
+    assert 'sim' not in ALLOWED['control'] and 'controllers' not in ALLOWED['sim']
+    assert is_ros('rospy') and is_ros('sensor_msgs.msg') and not is_ros('numpy')
+
+
+@pytest.mark.parametrize('module', sorted(modules()))
+def test_no_module_is_over_400_lines(module):
+    with open(modules()[module]) as f:
+        lines = sum(1 for _ in f)
+    assert lines <= MAX_MODULE_LINES, '%s: %d lines (at most %d): split it where it holds two things' % (
+        module, lines, MAX_MODULE_LINES)
