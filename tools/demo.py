@@ -23,6 +23,7 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 from closed_loop import netenv, robot_model
 from closed_loop.sim import obstacles, shapes, world as world_mod  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
+from closed_loop.sim import quiet  # noqa: E402
 
 STATUS_PERIOD_S = 1.0
 AT_REST_MPS = 0.01
@@ -170,8 +171,10 @@ def main():
     parser.add_argument('--robot', default='closed_loop', help='robot profile (config/robots/)')
     parser.add_argument('--seconds', type=float, default=None,
                         help='wall-clock bound of the run (default 30 s; 60 s with the navigator)')
+    parser.add_argument('--verbose', action='store_true', help="let pybullet's own output into the log")
     parser.add_argument('launch_args', nargs='*', help='extra roslaunch args (name:=value)')
     args = parser.parse_args()
+    quiet.set_verbose(args.verbose)
     if args.seconds is None:
         args.seconds = 60.0 if args.controller in NAVIGATORS else 30.0
     netenv.apply_loopback_defaults(os.environ)

@@ -22,6 +22,7 @@ import time
 import numpy
 
 from closed_loop.batch import sweep_file
+from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 
 RESULT_COLUMNS = ('outcome', 'mode', 'time_s', 'contacts', 'min_clearance_m', 'final_x', 'final_y', 'final_yaw',
@@ -246,12 +247,15 @@ def add_cluster_arguments(parser):
                         'cluster of one worker process per core)')
     parser.add_argument('--workers', type=int, help='local cluster size (default: the number of cores)')
     parser.add_argument('--resume', action='store_true', help='go on with the rows already in --output')
+    parser.add_argument('--verbose', action='store_true', help="let pybullet's own output (its banner, its URDF "
+                        'importer warnings) through to the terminal')
 
 
 def run_command(prog, make, output, args):
     """What a sweep command does: build the sweep (``make()``), run it into ``output`` (default
     sweeps/NAME) and report. Returns (exit status, sweep, rows); a refused sweep (2) or Ctrl-C (130)
     is said on stderr, with no sweep or rows."""
+    quiet.set_verbose(args.verbose)
     try:
         built = make()
         output = output or os.path.join('sweeps', built.name)

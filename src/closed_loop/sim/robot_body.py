@@ -7,11 +7,13 @@ import math
 import tempfile
 from dataclasses import dataclass
 
-import pybullet
 
+from closed_loop.sim.quiet import import_pybullet, native_output
 from closed_loop.sim import drive
 from closed_loop import robot_model
 from closed_loop.geometry import quaternion_yaw, yaw_quaternion
+
+pybullet = import_pybullet()
 
 # Spawn the robot this far above the ground so no wheel starts inside it.
 SPAWN_CLEARANCE_M = 0.002
@@ -80,10 +82,11 @@ class Robot:
         with tempfile.NamedTemporaryFile('w', suffix='.urdf', prefix='closed_loop-robot-') as urdf_file:
             urdf_file.write(self.model.urdf_text)
             urdf_file.flush()
-            self.robot_id = self._call(p.loadURDF, urdf_file.name,
-                                       basePosition=[start.x, start.y, SPAWN_CLEARANCE_M],
-                                       baseOrientation=yaw_quaternion(start.yaw),
-                                       flags=p.URDF_USE_INERTIA_FROM_FILE)
+            with native_output():       # pybullet's importer warns on stdout (a link with no inertia)
+                self.robot_id = self._call(p.loadURDF, urdf_file.name,
+                                           basePosition=[start.x, start.y, SPAWN_CLEARANCE_M],
+                                           baseOrientation=yaw_quaternion(start.yaw),
+                                           flags=p.URDF_USE_INERTIA_FROM_FILE)
         self._links = {}
         self._joints = {}
         for index in range(self._call(p.getNumJoints, self.robot_id)):

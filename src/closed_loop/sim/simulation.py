@@ -12,13 +12,15 @@ the ground truth frame; odometry starts at the robot's start pose.
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet
 
+from closed_loop.sim.quiet import import_pybullet
 from closed_loop.sim import obstacles, shapes
 from closed_loop import robot_model
 from closed_loop.geometry import yaw_quaternion
 from closed_loop.sim.robot_body import ALL_GROUPS, Robot, RobotSetup, RobotView  # noqa: F401 (RobotSetup for callers)
 from closed_loop.settings import param
+
+pybullet = import_pybullet()
 
 GRAVITY_MPS2 = 9.81
 # Constraint solver iterations per step. pybullet's default (50) is meant for stacks and grippers; a

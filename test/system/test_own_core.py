@@ -1,0 +1,116 @@
+"""Adding a controller is adding one core: a throw-away core, written here and nowhere in the package, runs
+unchanged in an episode and behind the controller node in a real graph (roscore, sim.launch), and the two
+agree on where the robot comes to rest (ground truth)."""
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+from conftest import ROOT, stop
+
+CORE = textwrap.dedent('''
+    """A throw-away controller: creep forward, halt when the nearest return ahead is within stop_at."""
+    import dataclasses
+
+    from closed_loop.control.loop import LoopSettings, stale_input
+    from closed_loop.control.scan import ScanError, sector_min
+    from closed_loop.controllers import STOP, Controller
+    from closed_loop.settings import param
+
+
+    @dataclasses.dataclass
+    class CreepSettings(LoopSettings):
+        speed: float = param(0.3, 'm/s', 'forward speed', minimum=0.0, live=True)
+        stop_at: float = param(0.8, 'm', 'halt when the nearest return ahead is closer', minimum=0.0, live=True)
+
+
+    class Creep(Controller):
+        name = 'creep'
+        settings_class = CreepSettings
+
+        def __init__(self, settings, context, *extra):
+            Controller.__init__(self, settings, context)
+            self.front, self.stamp_s = None, None
+
+        def on_scan(self, now_s, scan, odom):
+            try:
+                self.front, self.stamp_s = sector_min(scan, 0.0, 0.3).distance_m, scan.stamp_s
+            except (ScanError, AttributeError):
+                self.front, self.stamp_s = None, None
+            return None
+
+        def on_tick(self, now_s, odom):
+            self.fault = stale_input(now_s, (('scan', self.stamp_s),), self.settings.scan_timeout)
+            if self.fault is None and self.front < self.settings.stop_at:
+                self.enter('HALTED', now_s, 'return %.2f m ahead' % self.front)
+            elif self.fault is None:
+                self.enter('CREEPING', now_s, 'clear ahead')
+                return self.settings.speed, 0.0
+            return STOP
+''')
+HOST = textwrap.dedent('''
+    import sys, time
+    sys.path.insert(0, sys.argv[1])
+    import rosgraph
+    import rospy
+    # As roslaunch would have it: the simulated clock and the robot set before the node starts.
+    master = rosgraph.Master('/creep')
+    while not (master.hasParam('/use_sim_time') and master.hasParam('/robot_description')):
+        time.sleep(0.1)
+    import creep
+    from closed_loop.nodes.common import init_node
+    from closed_loop.nodes.controller_node import ControllerNode
+    init_node('creep')
+    ControllerNode(creep.Creep)
+    rospy.spin()
+''')
+WATCH = textwrap.dedent('''
+    import json, time
+    import rospy
+    from nav_msgs.msg import Odometry
+    from std_msgs.msg import String
+    rospy.init_node('watch')
+    modes, truth = [], []
+    rospy.Subscriber('/creep/mode', String, lambda m: modes.append(m.data))
+    rospy.Subscriber('/base_pose_ground_truth', Odometry, lambda m: truth.append(m))
+    deadline = time.monotonic() + 60.0
+    while time.monotonic() < deadline:
+        time.sleep(0.2)
+        if 'HALTED' in modes and truth and abs(truth[-1].twist.twist.linear.x) < 1e-3:
+            rest = [m for m in truth if abs(m.twist.twist.linear.x) < 1e-3]
+            if rest and rest[-1].header.stamp.to_sec() - rest[0].header.stamp.to_sec() > 1.0:
+                break
+    print(json.dumps({'modes': modes, 'x': truth[-1].pose.pose.position.x if truth else None}))
+''')
+
+
+def test_a_throw_away_core_runs_in_an_episode_and_in_the_graph_alike(tmp_path, roscore):
+    (tmp_path / 'creep.py').write_text(CORE)
+    sys.path.insert(0, str(tmp_path))
+    try:
+        import creep  # noqa: F401  (defining the class registers it with closed_loop.controllers)
+        from closed_loop.batch.episode import EpisodeSpec, run_episode
+        episode = run_episode(EpisodeSpec(world='wall', controller='creep', time_limit_s=20.0))
+    finally:
+        sys.path.remove(str(tmp_path))
+    assert episode.outcome == 'stopped' and episode.contacts == 0 and episode.mode == 'HALTED', episode
+
+    env = dict(roscore, PYTHONPATH=os.pathsep.join([os.path.join(ROOT, 'src'), os.environ.get('PYTHONPATH', '')]))
+    sim = subprocess.Popen(['roslaunch', 'closed_loop', 'sim.launch', 'world:=wall', 'camera:=false'], env=env,
+                           stdout=open(str(tmp_path / 'sim.log'), 'w'), stderr=subprocess.STDOUT,
+                           start_new_session=True)
+    host = subprocess.Popen([sys.executable, '-c', HOST, str(tmp_path)], env=env,
+                            stdout=open(str(tmp_path / 'host.log'), 'w'), stderr=subprocess.STDOUT,
+                            start_new_session=True)
+    try:
+        watched = subprocess.run([sys.executable, '-c', WATCH], env=env, stdout=subprocess.PIPE,
+                                 universal_newlines=True, timeout=120)
+    finally:
+        stop(host)
+        stop(sim)
+    graph = json.loads(watched.stdout.strip().splitlines()[-1])
+    logs = (tmp_path / 'host.log').read_text()
+    assert graph['modes'][:2] == ['CREEPING', 'HALTED'], (graph, logs)
+    assert abs(graph['x'] - episode.final_pose[0]) < 0.03, (graph, episode.final_pose, logs)
+    assert 'mode CREEPING -> HALTED: return' in logs or 'HALTED' in logs
