@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """`make screenshot`: run demo.launch rviz:=true on a virtual screen (Xvfb) with its own master, wait until
-the robot has driven, and save a screenshot of rviz to rviz/screenshot.png (shown in the README).
+the robot has driven, and save a screenshot of rviz to rviz/screenshot.png (shown in the README and the tutorial).
 
 Usage (inside ``source env.sh``): python3 tools/screenshot.py [--world red_box] [--out rviz/screenshot.png]
 """

@@ -6,7 +6,7 @@ need not resolve. So, when the user has set none of ``ROS_IP``, ``ROS_HOSTNAME``
 ``ROS_MASTER_URI``, the package sets ``ROS_IP=127.0.0.1`` and a loopback ``ROS_MASTER_URI``; when
 the user has set only a ``ROS_MASTER_URI`` on this machine's loopback, ``ROS_IP=127.0.0.1`` as well
 (a graph whose master is reachable on loopback only cannot be joined from elsewhere anyway). Anything
-else the user set is left alone: that is how a graph is opened to other machines (README).
+else the user set is left alone: that is how a graph is opened to other machines (docs/safety.md).
 
 ``python3 -m closed_loop.netenv`` prints the ``export`` lines for a shell (``env.sh`` uses it).
 """

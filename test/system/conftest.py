@@ -73,3 +73,13 @@ def roscore(tmp_path):
         yield env
     finally:
         stop(process)
+
+
+def doc_code(page, after):
+    """The first fenced code block of ``docs/page`` after the line ``after`` (a heading or a marker): the
+    docs' examples are run as they stand, so they cannot rot."""
+    lines = open(os.path.join(ROOT, 'docs', page)).read().split('\n')
+    start = lines.index(after)
+    begin = next(i for i in range(start, len(lines)) if lines[i].startswith('```'))
+    end = next(i for i in range(begin + 1, len(lines)) if lines[i].startswith('```'))
+    return '\n'.join(lines[begin + 1:end]) + '\n'

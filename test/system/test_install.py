@@ -1,4 +1,4 @@
-"""The package as a user installs it into a workspace of their own (README, "Using the package from your
+"""The package as a user installs it into a workspace of their own (docs/development.md, "Using the package from your
 own catkin workspace"): catkin_lint -W2 finds nothing; `catkin_make install` with the venv's interpreter
 puts that interpreter into the installed scripts, so the demo runs from the install space with a PATH that
 has no venv on it."""
@@ -56,7 +56,7 @@ def test_lint_clean_and_the_install_space_runs_the_demo_without_the_venv_on_path
     assert lint.returncode == 0 and not problems, lint.stdout
     assert 'found 0 problems' in lint.stdout or 'checked 1 packages and found 0' in lint.stdout, lint.stdout
 
-    # The README's step: catkin_make install with the venv's interpreter (sys.executable is that venv's).
+    # The documented step: catkin_make install with the venv's interpreter (sys.executable is that venv's).
     python = sys.executable
     build = subprocess.run(['catkin_make', '-C', str(workspace), 'install', '-DPYTHON_EXECUTABLE=' + python],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, env=env,

@@ -1,54 +1,16 @@
-"""Adding a controller is adding one core: a throw-away core, written here and nowhere in the package, runs
-unchanged in an episode and behind the controller node in a real graph (roscore, sim.launch), and the two
-agree on where the robot comes to rest (ground truth)."""
+"""Adding a controller is adding one core: the throw-away core of docs/development.md, nowhere in the package,
+runs unchanged in an episode and behind the controller node in a real graph (roscore, sim.launch), and the
+two agree on where the robot comes to rest (ground truth)."""
 import json
 import os
 import subprocess
 import sys
 import textwrap
 
-from conftest import ROOT, stop
+from conftest import ROOT, doc_code, stop
 
-CORE = textwrap.dedent('''
-    """A throw-away controller: creep forward, halt when the nearest return ahead is within stop_at."""
-    import dataclasses
-
-    from closed_loop.control.loop import LoopSettings, stale_input
-    from closed_loop.control.scan import ScanError, sector_min
-    from closed_loop.controllers import STOP, Controller
-    from closed_loop.settings import param
-
-
-    @dataclasses.dataclass
-    class CreepSettings(LoopSettings):
-        speed: float = param(0.3, 'm/s', 'forward speed', minimum=0.0, live=True)
-        stop_at: float = param(0.8, 'm', 'halt when the nearest return ahead is closer', minimum=0.0, live=True)
-
-
-    class Creep(Controller):
-        name = 'creep'
-        settings_class = CreepSettings
-
-        def __init__(self, settings, context, *extra):
-            Controller.__init__(self, settings, context)
-            self.front, self.stamp_s = None, None
-
-        def on_scan(self, now_s, scan, odom):
-            try:
-                self.front, self.stamp_s = sector_min(scan, 0.0, 0.3).distance_m, scan.stamp_s
-            except (ScanError, AttributeError):
-                self.front, self.stamp_s = None, None
-            return None
-
-        def on_tick(self, now_s, odom):
-            self.fault = stale_input(now_s, (('scan', self.stamp_s),), self.settings.scan_timeout)
-            if self.fault is None and self.front < self.settings.stop_at:
-                self.enter('HALTED', now_s, 'return %.2f m ahead' % self.front)
-            elif self.fault is None:
-                self.enter('CREEPING', now_s, 'clear ahead')
-                return self.settings.speed, 0.0
-            return STOP
-''')
+# The example of docs/development.md, as it stands there.
+CORE = doc_code('development.md', '## Adding a controller')
 HOST = textwrap.dedent('''
     import sys, time
     sys.path.insert(0, sys.argv[1])

@@ -37,11 +37,11 @@ class FusionSettings:
     """The fusion rule's ``~parameters``."""
     bearing_tolerance: float = param(math.radians(4.0), 'rad', 'a detection matches a track whose bearing '
                                      'from the camera is this close (plus the track\'s half-width)',
-                                     minimum=0.0, maximum=0.5, live=True)
+                                     minimum=0.0, maximum=0.5)
     max_frame_age: float = param(0.5, 's', 'a camera detection older than this is not used', minimum=0.0,
-                                 exclusive_minimum=True, maximum=5.0, live=True)
+                                 exclusive_minimum=True, maximum=5.0)
     static_after: float = param(1.0, 's', 'a track seen this long, not moving and not red, is STATIC',
-                                minimum=0.0, maximum=30.0, live=True)
+                                minimum=0.0, maximum=30.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,16 +125,16 @@ def fresh_detection(detection_u, frame_stamp_s, now_s, settings):
 class WaitSettings:
     """When the fusion controller waits (its ``~parameters``)."""
     look_ahead: float = param(2.5, 'm', 'a PERSON or UNKNOWN track within this far ahead, in the robot\'s path, '
-                              'makes it wait', minimum=0.2, maximum=10.0, live=True)
+                              'makes it wait', minimum=0.2, maximum=10.0)
     path_margin: float = param(0.2, 'm', 'the path is the robot\'s width plus this much each side (and the '
-                               'track\'s half-size)', minimum=0.0, maximum=2.0, live=True)
+                               'track\'s half-size)', minimum=0.0, maximum=2.0)
     predict_s: float = param(2.0, 's', 'a moving track counts as in the path if its straight-line motion '
-                             'brings it there within this time', minimum=0.0, maximum=10.0, live=True)
+                             'brings it there within this time', minimum=0.0, maximum=10.0)
     hold_s: float = param(1.0, 's', 'the path must be clear this long before the robot goes on', minimum=0.0,
-                          maximum=30.0, live=True)
+                          maximum=30.0)
     unknown_look_ahead: float = param(1.0, 'm', 'an UNKNOWN track (too new to tell) makes the robot wait only '
                                       'this near; farther, it will be known before the robot gets there',
-                                      minimum=0.2, maximum=10.0, live=True)
+                                      minimum=0.2, maximum=10.0)
 
 
 #: Predicted positions of a moving track are checked this often (s) over ``predict_s``.

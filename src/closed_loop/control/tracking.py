@@ -35,18 +35,18 @@ GAP_RAYS = 3.0
 class TrackerSettings:
     """The tracker's ``~parameters`` (the fusion controller's)."""
     cluster_gap: float = param(0.15, 'm', 'neighbouring returns farther apart than this (or than 3 ray-arcs '
-                               'at their range) start a new cluster', minimum=0.01, maximum=2.0, live=True)
-    min_points: int = param(3, '', 'a cluster has at least this many returns', minimum=1, maximum=100, live=True)
+                               'at their range) start a new cluster', minimum=0.01, maximum=2.0)
+    min_points: int = param(3, '', 'a cluster has at least this many returns', minimum=1, maximum=100)
     max_size: float = param(1.0, 'm', 'clusters larger than this (walls) are not tracked as objects',
-                            minimum=0.1, maximum=10.0, live=True)
+                            minimum=0.1, maximum=10.0)
     gate: float = param(0.5, 'm', 'a cluster joins the track predicted nearest to it within this', minimum=0.05,
-                        maximum=5.0, live=True)
+                        maximum=5.0)
     window_s: float = param(1.0, 's', 'velocity is fitted over this much of a track\'s history',
-                            minimum=0.2, maximum=10.0, live=True)
+                            minimum=0.2, maximum=10.0)
     moving_speed: float = param(0.3, 'm/s', 'a track faster than this over the window is moving',
-                                minimum=0.0, exclusive_minimum=True, live=True)
+                                minimum=0.0, exclusive_minimum=True)
     track_timeout: float = param(1.0, 's', 'a track unseen this long is dropped', minimum=0.1, maximum=30.0,
-                                 live=True)
+                                )
 
 
 @dataclasses.dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 A world file describes the ground, the robot's start pose and a list of obstacles (boxes, cylinders
 and walls, which become boxes). Units and axes follow REP 103: metres, radians, x forward, y left,
-z up, yaw counter-clockwise about +z. The format is documented in the README; in short::
+z up, yaw counter-clockwise about +z. The format is documented in docs/simulator.md; in short::
 
     name: wall
     description: "A wall 3 m ahead"

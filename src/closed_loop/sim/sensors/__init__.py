@@ -13,7 +13,7 @@ The contract of a sensor class:
 - ``sample(sim)``: one reading; ``reset()``: forget state when the world is reset.
 
 Adding a sensor: a file here with such a class, a conversion to its message in
-``closed_loop.nodes.sim_node``, and one line in that node's ``SENSORS`` table (README, "Adding a sensor").
+``closed_loop.nodes.sim_node``, and one line in that node's ``SENSORS`` table (docs/development.md, "Adding a sensor").
 """
 
 
