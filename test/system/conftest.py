@@ -83,3 +83,22 @@ def doc_code(page, after):
     begin = next(i for i in range(start, len(lines)) if lines[i].startswith('```'))
     end = next(i for i in range(begin + 1, len(lines)) if lines[i].startswith('```'))
     return '\n'.join(lines[begin + 1:end]) + '\n'
+
+
+def drive_in_sim(env, tmp_path, controller_argv, watch_script, world='wall', timeout_s=120):
+    """``sim.launch`` in ``world`` (camera off) and a controller process beside it, while ``watch_script``
+    (Python, run in a process of its own) watches the graph and prints one JSON line as its last; returns
+    that line's value. The controller's output is in ``tmp_path/controller.log``."""
+    import json
+    sim = subprocess.Popen(['roslaunch', 'closed_loop', 'sim.launch', 'world:=' + world, 'camera:=false'],
+                           env=env, stdout=open(str(tmp_path / 'sim.log'), 'w'), stderr=subprocess.STDOUT,
+                           start_new_session=True)
+    controller = subprocess.Popen(controller_argv, env=env, stdout=open(str(tmp_path / 'controller.log'), 'w'),
+                                  stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        watched = subprocess.run([sys.executable, '-c', watch_script], env=env, stdout=subprocess.PIPE,
+                                 universal_newlines=True, timeout=timeout_s)
+    finally:
+        stop(controller)
+        stop(sim)
+    return json.loads(watched.stdout.strip().splitlines()[-1])

@@ -1,13 +1,11 @@
 """Adding a controller is adding one core: the throw-away core of docs/development.md, nowhere in the package,
 runs unchanged in an episode and behind the controller node in a real graph (roscore, sim.launch), and the
 two agree on where the robot comes to rest (ground truth)."""
-import json
 import os
-import subprocess
 import sys
 import textwrap
 
-from conftest import ROOT, doc_code, stop
+from conftest import ROOT, doc_code, drive_in_sim
 
 # The example of docs/development.md, as it stands there.
 CORE = doc_code('development.md', '## Adding a controller')
@@ -59,20 +57,8 @@ def test_a_throw_away_core_runs_in_an_episode_and_in_the_graph_alike(tmp_path, r
     assert episode.outcome == 'stopped' and episode.contacts == 0 and episode.mode == 'HALTED', episode
 
     env = dict(roscore, PYTHONPATH=os.pathsep.join([os.path.join(ROOT, 'src'), os.environ.get('PYTHONPATH', '')]))
-    sim = subprocess.Popen(['roslaunch', 'closed_loop', 'sim.launch', 'world:=wall', 'camera:=false'], env=env,
-                           stdout=open(str(tmp_path / 'sim.log'), 'w'), stderr=subprocess.STDOUT,
-                           start_new_session=True)
-    host = subprocess.Popen([sys.executable, '-c', HOST, str(tmp_path)], env=env,
-                            stdout=open(str(tmp_path / 'host.log'), 'w'), stderr=subprocess.STDOUT,
-                            start_new_session=True)
-    try:
-        watched = subprocess.run([sys.executable, '-c', WATCH], env=env, stdout=subprocess.PIPE,
-                                 universal_newlines=True, timeout=120)
-    finally:
-        stop(host)
-        stop(sim)
-    graph = json.loads(watched.stdout.strip().splitlines()[-1])
-    logs = (tmp_path / 'host.log').read_text()
+    graph = drive_in_sim(env, tmp_path, [sys.executable, '-c', HOST, str(tmp_path)], WATCH)
+    logs = (tmp_path / 'controller.log').read_text()
     assert graph['modes'][:2] == ['CREEPING', 'HALTED'], (graph, logs)
     assert abs(graph['x'] - episode.final_pose[0]) < 0.03, (graph, episode.final_pose, logs)
     assert 'mode CREEPING -> HALTED: return' in logs or 'HALTED' in logs

@@ -15,6 +15,11 @@ FRAMES = ('base', 'odom')
 KINDS = ('line', 'points', 'sphere', 'cylinder', 'arrow')
 
 
+def _one_of(name, value, allowed):
+    if value not in allowed:
+        raise ValueError('%s: expected one of %s, got %r' % (name, ', '.join(allowed), value))
+
+
 @dataclasses.dataclass(frozen=True)
 class Shape:
     """One marker. ``kind``: one of :data:`KINDS`; ``ns`` and ``id`` name it in rviz. ``points``: (x, y, z) m
@@ -31,8 +36,7 @@ class Shape:
     colours: tuple = ()
 
     def __post_init__(self):
-        if self.kind not in KINDS:
-            raise ValueError('kind: expected one of %s, got %r' % (', '.join(KINDS), self.kind))
+        _one_of('kind', self.kind, KINDS)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,8 +47,7 @@ class Drawing:
     clear: bool = False
 
     def __post_init__(self):
-        if self.frame not in FRAMES:
-            raise ValueError('frame: expected one of %s, got %r' % (', '.join(FRAMES), self.frame))
+        _one_of('frame', self.frame, FRAMES)
 
 
 @dataclasses.dataclass(frozen=True)
