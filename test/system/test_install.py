@@ -68,7 +68,7 @@ def test_lint_clean_and_the_install_space_runs_the_demo_without_the_venv_on_path
         with open(str(install / 'lib' / 'closed_loop' / name)) as f:
             assert f.readline().strip() == '#!' + python, 'lib/closed_loop/%s does not name the venv' % name
     assert (install / 'share' / 'closed_loop' / 'config' / 'robots' / 'burger.yaml').is_file()
-    site = [p for p in (install / 'lib').glob('python3*/*-packages/closed_loop/sensors/lidar.py')]
+    site = [p for p in (install / 'lib').glob('python3*/*-packages/closed_loop/sim/sensors/lidar.py')]
     assert site, 'closed_loop.sim.sensors is not installed'
 
     port = free_port()

@@ -118,3 +118,23 @@ def test_no_module_is_over_400_lines(module):
         lines = sum(1 for _ in f)
     assert lines <= MAX_MODULE_LINES, '%s: %d lines (at most %d): split it where it holds two things' % (
         module, lines, MAX_MODULE_LINES)
+
+
+def test_every_module_imports():
+    """Every module of the package imports (the nodes too, where rospy is installed): a stale import after a
+    move fails here, not in a graph."""
+    import importlib
+    try:
+        import rospy  # noqa: F401
+        has_ros = True
+    except ImportError:
+        has_ros = False
+    failed = {}
+    for module in sorted(modules()):
+        if layer(module) == 'nodes' and not has_ros:
+            continue
+        try:
+            importlib.import_module(module)
+        except Exception as error:      # any failure to import is the finding
+            failed[module] = '%s: %s' % (type(error).__name__, error)
+    assert not failed, failed

@@ -8,7 +8,7 @@ from nav_msgs.msg import Odometry
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
-from closed_loop.control.decisions import SilenceWatchdog
+from closed_loop.watchdog import SilenceWatchdog
 from closed_loop.control.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
 from closed_loop.nodes.common import (LiveSettings, StopsOnShutdown, frame_id, init_node, load_settings,
                                       robot_geometry)
