@@ -1,19 +1,22 @@
 #!/usr/bin/env python3
-"""Run every test of closed_loop -- pytest unit tests, system tests, then each rostest -- and print one closing line.
+"""Run every test of closed_loop -- the unit tests, the system tests and every rostest -- and print one closing line.
 
 Usage (inside ``source env.sh``; ``make test`` does that):
     python3 tools/run_tests.py [--unit-only] [--rostest-only] [-k NAME]
 
 Unit tests (test/unit) need no master. System tests (test/system) start real ROS processes outside
 rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces -- and need root.
-Rostest files run one at a time, except the navigation ones (avoid_*, fusion_*, robot_*), which run two at
-a time after the others, each with the master rostest starts on a free port.
+Rostest files each get the master rostest starts on a free port. First roslaunch-check on every launch file,
+then the rostest files that measure rates or wall time, change a node while it runs, or start rviz (ALONE),
+one at a time; then the unit tests, every system test file and every other rostest file, SIDE_BY_SIDE at a
+time, each with its own output in test_output/ (printed when it fails).
 
 Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed``
 (pytest and rostest counted together); the exit status is non-zero if anything failed or nothing ran.
 """
 import argparse
 import concurrent.futures
+import functools
 import glob
 import os
 import shutil
@@ -47,22 +50,6 @@ def count_junit(path):
     return passed, failed, skipped, names
 
 
-def run_unit(args, layer='unit'):
-    xml = os.path.join(OUT, layer + '.xml')
-    cmd = [sys.executable, '-m', 'pytest', os.path.join(ROOT, 'test', layer), '-q', '-p', 'no:cacheprovider',
-           '--junitxml', xml]
-    if args.k:
-        cmd += ['-k', args.k]
-    print('== %s tests: %s' % (layer, ' '.join(cmd[2:])), flush=True)
-    code = subprocess.call(cmd, cwd=ROOT)
-    if not os.path.exists(xml):
-        return 0, 1, 0, ['pytest (exit %d, no results)' % code]
-    passed, failed, skipped, names = count_junit(xml)
-    if code not in (0, 5) and failed == 0:
-        failed, names = 1, ['pytest (exit %d)' % code]
-    return passed, failed, skipped, names
-
-
 def run_launch_checks(args):
     """roslaunch-check on every launch file (what roslaunch_add_file_check registers for catkin)."""
     script = '/usr/share/roslaunch/scripts/roslaunch-check'
@@ -88,11 +75,11 @@ def run_launch_checks(args):
     return passed, failed, 0, names
 
 
-#: Rostest files that may run two at a time, each with its own master (rostest starts one on a free port)
-#: and its own ROS_HOME and logs: the navigation tests, judged on simulated time and ground truth. The
-#: others, which measure rates or wall time or start rviz, run one at a time first.
-SIDE_BY_SIDE_PREFIXES = ('avoid_', 'fusion_', 'robot_')
-SIDE_BY_SIDE = 2
+#: Jobs that measure rates or wall time, change a node while it runs, or start rviz, run alone; every other job (a system test file, a
+#: rostest judged on simulated time and ground truth) runs two at a time, each rostest with the master
+#: rostest starts on a free port and its own ROS_HOME and logs, each system test on its own free ports.
+ALONE = ('sim_wall', 'loop_wall', 'loop_fast', 'kill_controller', 'kill_sim', 'rviz_display', 'reconfigure')
+SIDE_BY_SIDE = 3
 
 
 def run_rostest_file(path, results_dir):
@@ -136,15 +123,45 @@ def run_rostest_file(path, results_dir):
     return p, f, s, names, text
 
 
-def run_rostests(args):
-    files = sorted(glob.glob(os.path.join(ROOT, 'test', 'rostest', '*.test')))
-    if args.k:
-        files = [f for f in files if args.k in os.path.basename(f)]
+def run_pytest(path, results_dir, select=None):
+    """pytest on a file of test/system or on test/unit (``select``: its -k); returns (passed, failed, skipped,
+    failed names, what to print)."""
+    name = os.path.splitext(os.path.basename(path))[0]
+    xml = os.path.join(results_dir, name + '.xml')
+    log = os.path.join(results_dir, name + '.log')
+    started = time.monotonic()
+    with open(log, 'w') as out:
+        code = subprocess.call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider',
+                                '--junitxml', xml] + (['-k', select] if select else []),
+                               stdout=out, stderr=subprocess.STDOUT, cwd=ROOT)
+    p, f, s, names = count_junit(xml) if os.path.exists(xml) else (0, 0, 0, [])
+    if code not in (0, 5) and f == 0:
+        f, names = 1, ['%s (pytest exit %d, see %s)' % (name, code, log)]
+    text = '== pytest %s ... %d passed, %d failed (%.0f s)' % (name, p, f, time.monotonic() - started)
+    if f:
+        with open(log) as out:
+            text += '\n   --- tail of %s ---\n%s' % (log, out.read()[-3000:])
+    return p, f, s, names, text
+
+
+def run_all(args):
+    """The unit tests, the system test files and the rostest files: the ones in ALONE one at a time, then the
+    rest SIDE_BY_SIDE at a time."""
+    jobs = []
+    if not args.rostest_only:
+        unit = functools.partial(run_pytest, select=args.k)
+        jobs.append((os.path.join(ROOT, 'test', 'unit'), unit, OUT))
+    if not args.rostest_only and not args.unit_only:
+        for path in sorted(glob.glob(os.path.join(ROOT, 'test', 'system', 'test_*.py'))):
+            if not args.k or args.k in os.path.basename(path):
+                jobs.append((path, run_pytest, os.path.join(OUT, 'system')))
+    if not args.unit_only:
+        for path in sorted(glob.glob(os.path.join(ROOT, 'test', 'rostest', '*.test'))):
+            if not args.k or args.k in os.path.basename(path):
+                jobs.append((path, run_rostest_file, os.path.join(OUT, 'rostest')))
+    for _, _, folder in jobs:
+        os.makedirs(folder, exist_ok=True)
     totals = [0, 0, 0, []]
-    results_dir = os.path.join(OUT, 'rostest')
-    os.makedirs(results_dir, exist_ok=True)
-    paired = [f for f in files if os.path.basename(f).startswith(SIDE_BY_SIDE_PREFIXES)]
-    alone = [f for f in files if f not in paired]
 
     def count(result):
         p, f, s, names, text = result
@@ -153,13 +170,16 @@ def run_rostests(args):
         totals[1] += f
         totals[2] += s
         totals[3] += names
-    for path in alone:
-        count(run_rostest_file(path, results_dir))
-    if paired:
-        print('== rostest: %d navigation files, %d at a time' % (len(paired), SIDE_BY_SIDE), flush=True)
+    alone = [j for j in jobs if os.path.splitext(os.path.basename(j[0]))[0] in ALONE]
+    together = [j for j in jobs if j not in alone]
+    for path, run, folder in alone:
+        count(run(path, folder))
+    if together:
+        print('== %d jobs (unit tests, system test files, rostest files), %d at a time'
+              % (len(together), SIDE_BY_SIDE), flush=True)
         with concurrent.futures.ThreadPoolExecutor(SIDE_BY_SIDE) as pool:
-            for future in concurrent.futures.as_completed([pool.submit(run_rostest_file, path, results_dir)
-                                                           for path in paired]):
+            for future in concurrent.futures.as_completed([pool.submit(run, path, folder)
+                                                           for path, run, folder in together]):
                 count(future.result())
     return tuple(totals)
 
@@ -169,19 +189,17 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--unit-only', action='store_true')
     parser.add_argument('--rostest-only', action='store_true')
-    parser.add_argument('-k', help='only tests (pytest -k) / rostest files whose name contains this')
+    parser.add_argument('-k', help='only unit tests matching it (pytest -k), and system test and rostest files '
+                        'whose name contains it')
     args = parser.parse_args()
     shutil.rmtree(OUT, ignore_errors=True)
     os.makedirs(OUT)
     passed = failed = skipped = 0
     failures = []
     parts = []
-    if not args.rostest_only:
-        parts.append(run_unit)
-    if not args.unit_only and not args.rostest_only:
-        parts.append(lambda a: run_unit(a, 'system'))
     if not args.unit_only:
-        parts += [run_launch_checks, run_rostests]
+        parts.append(run_launch_checks)
+    parts.append(run_all)
     for part in parts:
         p, f, s, names = part(args)
         passed, failed, skipped = passed + p, failed + f, skipped + s
