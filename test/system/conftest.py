@@ -49,16 +49,28 @@ def wait_master(port, process=None, timeout_s=MASTER_WAIT_S):
 
 
 def stop(process, sig=signal.SIGINT, timeout_s=20.0):
-    """End a process group started with start_new_session=True: ``sig``, then SIGKILL."""
+    """End a process group started with start_new_session=True: ``sig``, then SIGKILL, and SIGKILL to whatever
+    of the group outlived its leader."""
     if process.poll() is None:
         try:
             os.killpg(process.pid, sig)
             process.wait(timeout_s)
         except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
-            process.wait(5)
+            pass
         except ProcessLookupError:
             pass
+    kill_group(process)
+
+
+def kill_group(process):
+    """SIGKILL whatever is left of the process group a process started with start_new_session=True led,
+    even after the leader itself has ended (a background child of a shell that exited early)."""
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    if process.poll() is None:
+        process.wait(5)
 
 
 @pytest.fixture

@@ -118,7 +118,8 @@ def test_demo_graph_listens_on_loopback_and_comes_up_where_the_host_name_does_no
         try:
             graph.wait(30)
         except subprocess.TimeoutExpired:
-            stop(graph)
+            pass
+        stop(graph)             # and the launch, had the script ended early (set -e)
         subprocess.run(['ip', 'netns', 'del', peer_ns], stderr=subprocess.DEVNULL)
 
     env_seen = (tmp_path / 'env.txt').read_text()
