@@ -5,7 +5,6 @@ separation, the footprint rectangle, where the LIDAR and camera sit. A robot pro
 frames and joints play which part (:class:`RobotNames`); nothing here restates a dimension.
 """
 import math
-import os
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 

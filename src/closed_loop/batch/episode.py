@@ -24,31 +24,18 @@ robot's collision shapes and any obstacle at the controller's rate, the path, th
 """
 import dataclasses
 import math
-import time
 from typing import Optional
 
-import cv2
-
 from closed_loop.sim import clutter
-from closed_loop.commands import validate_command
-from closed_loop.control.vision import VisionSettings, detect_red
-from closed_loop.controllers import Context, ControllerError, Odom, controller_class
-from closed_loop.geometry import quaternion_yaw
+from closed_loop.controllers import ControllerError, controller_class, controller_classes
 from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
+from closed_loop.batch.judge import JudgeSettings
 from closed_loop.sim.rig import Rig
-from closed_loop.control.scan import Scan
-from closed_loop.sim.sensors.camera import Camera
-from closed_loop.sim.sensors.lidar import Lidar
 from closed_loop.settings import SettingsError, check
 from closed_loop.sim.world import load_world, parse_world, resolve_world
 
 #: A goal counts as reached when ground truth ends this close to it (m), with no contact.
-SUCCESS_RADIUS_M = 0.4
-#: Clearance to obstacles is looked for up to this far (m); beyond, it reads as this.
-CLEARANCE_LOOKOUT_M = 2.0
-#: At rest: ground-truth speeds under these (m/s, rad/s), under a zero command, for REST_HOLD_S.
-REST_MPS, REST_RADPS, REST_HOLD_S = 1e-3, 1e-3, 1.0
-OUTCOMES = ('reached', 'stopped', 'failed', 'timed_out', 'collided', 'error')
+SUCCESS_RADIUS_M = JudgeSettings().success_radius
 
 
 class EpisodeError(ValueError):
@@ -64,10 +51,12 @@ class EpisodeSpec:
     ``goal``: (x, y) in the world frame for a controller that takes one (default: the world's ``goal:``,
     else its own default); ``time_limit_s``: simulated seconds; ``keep_trajectory``: keep a row per tick;
     ``end_on_contact``: end the episode at the physics step of its first contact (outcome 'collided',
-    one contact), where a sweep asks only whether there was one."""
+    one contact), where a sweep asks only whether there was one. A ``controller`` that is a mapping makes a
+    graph episode (``closed_loop.batch.graph_episode``): ``{launch: PKG/path.launch, args: {...}}`` or
+    ``{node: NAME}``, its simulator at ``real_time_factor`` (None: the measured default)."""
     world: object = 'wall'
     robot: str = 'closed_loop'
-    controller: str = 'stop_on_obstacle'
+    controller: object = 'stop_on_obstacle'
     settings: dict = dataclasses.field(default_factory=dict)
     sim: dict = dataclasses.field(default_factory=dict)
     scan_noise: float = 0.0
@@ -78,6 +67,7 @@ class EpisodeSpec:
     end_on_contact: bool = False
     command_delay_s: float = 0.01
     timer_phase_s: float = 0.05
+    real_time_factor: Optional[float] = None
 
     def to_dict(self):
         return dataclasses.asdict(self)
@@ -100,12 +90,10 @@ class EpisodeSpec:
 
 @dataclasses.dataclass
 class EpisodeResult:
-    """What one episode did. ``outcome``: 'reached' (the controller said REACHED and ground truth is within
-    SUCCESS_RADIUS_M of the goal), 'stopped' (at rest under a zero command for REST_HOLD_S), 'failed'
-    (FAILED, or REACHED by odometry only), 'timed_out', 'collided' (any contact; it wins over the others),
-    or 'error' (the episode raised: ``error`` says what). ``time_s``: when it came to rest, reached, or
-    ended. ``final_pose``: ground truth (x, y, yaw) in the world frame. ``trajectory`` (on request): per
-    tick (t, x, y, yaw, speed, command v, command w, mode)."""
+    """What one episode did: the judge's verdict (``closed_loop.batch.judge``: the outcome, 'reached',
+    'stopped', 'failed', 'timed_out' or 'collided', by the rules written there; or 'error', when the
+    episode could not run: ``error`` says why), the costs measured, and on request the trajectory: a row
+    per judged instant (t, x, y, yaw, speed, command v, command w, mode)."""
     outcome: str
     mode: Optional[str] = None
     time_s: float = 0.0
@@ -121,6 +109,10 @@ class EpisodeResult:
     timings: dict = dataclasses.field(default_factory=dict)
     trajectory: Optional[list] = None
     error: Optional[str] = None
+    #: The verdict in one line (``closed_loop.batch.judge``).
+    why: str = ''
+    #: A graph episode's folder of logs (None in process).
+    logs: Optional[str] = None
 
 
 def load_episode_world(spec_world, profile):
@@ -176,6 +168,8 @@ class Prepared:
     goal_odom: Optional[tuple]
     goal_world: Optional[tuple]
     extra_settings: list = dataclasses.field(default_factory=list)
+    #: A graph episode's controller (``closed_loop.batch.graph_episode``), or None in process.
+    graph: Optional[dict] = None
 
 
 def prepare(spec, cache=None):
@@ -190,8 +184,15 @@ def prepare(spec, cache=None):
     except (TypeError, ValueError) as error:
         raise EpisodeError('robot: %s' % error)
     profile = cache[key]
+    graph = None
+    if isinstance(spec.controller, dict):
+        from closed_loop.batch import graph_episode
+        graph = graph_episode.parse_controller(spec.controller, controller_classes())
+        name = graph.get('node')
+    else:
+        name = spec.controller
     try:
-        cls = controller_class(spec.controller)
+        cls = controller_class(name) if name is not None else None
     except ControllerError as error:
         raise EpisodeError(str(error))
     key = ('world', repr(spec.world), spec.robot)
@@ -205,8 +206,13 @@ def prepare(spec, cache=None):
     world = cache[key]
     if not isinstance(spec.settings, dict) or not isinstance(spec.sim, dict):
         raise EpisodeError('settings, sim: expected mappings of ~parameters')
-    settings, *extra = controller_settings(cls, dict(profile.node_params(cls.name), **spec.settings))
-    sim_params = dict(profile.node_params('sim'), camera=cls.uses_camera, ray_caster='planar',
+    if cls is not None:
+        settings, *extra = controller_settings(cls, dict(profile.node_params(cls.name), **spec.settings))
+    elif spec.settings:
+        raise EpisodeError("settings: a launch file's controller takes args (controller.args), not settings")
+    else:
+        settings, extra = None, []
+    sim_params = dict(profile.node_params('sim'), camera=bool(cls and cls.uses_camera), ray_caster='planar',
                       scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed)
     sim_params.update(spec.sim)
     try:
@@ -221,6 +227,10 @@ def prepare(spec, cache=None):
     for name in ('keep_trajectory', 'end_on_contact'):
         if not isinstance(getattr(spec, name), bool):
             raise EpisodeError('%s: expected true or false, got %r' % (name, getattr(spec, name)))
+    rtf = spec.real_time_factor
+    if rtf is not None and (isinstance(rtf, bool) or not isinstance(rtf, (int, float)) or not 0.1 <= rtf <= 20.0):
+        raise EpisodeError('real_time_factor: expected a number from 0.1 to 20 (simulated s per wall s), got %r'
+                           % (rtf,))
     start = world.robot_start
     goal_world = tuple(spec.goal) if spec.goal is not None else world.goal
     if goal_world is not None and (len(goal_world) != 2 or not all(
@@ -231,119 +241,31 @@ def prepare(spec, cache=None):
         d = extra[0].goal_distance
         goal = (d, 0.0)
         goal_world = (start.x + d * math.cos(start.yaw), start.y + d * math.sin(start.yaw))
-    return Prepared(profile, cls, world, settings, sim_params, goal, goal_world, extra)
+    return Prepared(profile, cls, world, settings, sim_params, goal, goal_world, extra, graph)
 
 
-def run_episode(spec, cache=None):
-    """Run ``spec`` (an :class:`EpisodeSpec`); an unusable spec raises :class:`EpisodeError`."""
-    started = time.monotonic()
-    p = prepare(spec, cache)
-    laser_pose = p.profile.laser_pose(p.settings.scan_frame)
-    rig = Rig(p.world, p.sim_params, p.profile.urdf)
-    try:
-        try:
-            camera_pose = p.profile.laser_pose(rig.sim.model.names.camera_frame)
-        except ValueError:
-            camera_pose = None
-        controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, p.goal_odom,
-                                                            camera_pose), *p.extra_settings)
-        controller.record_timings = True
-        result = _loop(spec, rig, controller, p.goal_world)
-    finally:
-        rig.close()
-    result.decision_ms = getattr(controller, 'decision_ms', [])
-    result.timings = dict(getattr(controller, 'timings', {}))
-    result.wall_s = time.monotonic() - started
-    return result
+def run_episode(spec, cache=None, logs_root=None):
+    """Run ``spec`` (an :class:`EpisodeSpec`): its controller's core in lockstep with the simulation
+    (``closed_loop.batch.lockstep``), or a graph (``closed_loop.batch.graph_episode``, its folder under
+    ``logs_root``). An unusable spec raises :class:`EpisodeError`."""
+    prepared = prepare(spec, cache)
+    if prepared.graph is not None:
+        from closed_loop.batch.graph_episode import run_graph
+        return run_graph(spec, prepared, logs_root)
+    from closed_loop.batch.lockstep import run_in_process
+    return run_in_process(spec, prepared)
 
 
-def _loop(spec, rig, controller, goal_world):
-    sim = rig.sim
-    lidar = rig.sensors[Lidar]
-    layout, ls = lidar.layout, lidar.settings
-    dt = sim.dt_s
-    steps_per_scan = max(1, int(round(lidar.period_s / dt)))
-    steps_per_tick = max(1, int(round(1.0 / controller.settings.rate_hz / dt)))
-    phase = int(round(spec.timer_phase_s / dt)) % steps_per_tick
-    delay = max(1, int(round(spec.command_delay_s / dt)))
-    camera = rig.sensors.get(Camera) if controller.uses_camera else None
-    if camera is not None:
-        steps_per_frame = max(1, int(round(camera.period_s / dt)))
-        frame_phase = int(round(camera.offset_s / dt)) % steps_per_frame
-        vision = VisionSettings()
-        controller.on_camera_info(camera.intrinsics.fx, camera.intrinsics.cx, camera.intrinsics.width)
-    pending = []                      # (step, command), in order
-    contacts, touching, clearance, path_m, peak_decel = 0, set(), math.inf, 0.0, 0.0
-    pose, _ = sim.ground_truth()
-    last_xy, last_speed, last_t = pose.position[:2], 0.0, 0.0
-    trajectory = [] if spec.keep_trajectory else None
-    command, rest_since, ended_s = (0.0, 0.0), None, None
-    last = int(round(spec.time_limit_s / dt))
-    for k in range(last + 1):
-        now = sim.time_s
-        sent = odom = None
-        scan_due, frame_due = k % steps_per_scan == 0, camera is not None and k % steps_per_frame == frame_phase
-        if scan_due or frame_due or k % steps_per_tick == phase:
-            odo = sim.odometry
-            odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
-        if scan_due:
-            scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
-                        lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
-            sent = controller.on_scan(now, scan, odom)
-        if frame_due:
-            # What vision_node does in the graph: a red_centroid only for a frame with red in it.
-            found = detect_red(cv2.cvtColor(camera.sample(sim), cv2.COLOR_RGB2BGR), vision)
-            if found.detected:
-                controller.on_detection(found.centroid_px[0], now, odom)
-        if k % steps_per_tick == phase:
-            sent = controller.on_tick(now, odom)
-            controller.take_transitions()       # what the node logs; an episode keeps only the mode
-            pose, (linear, angular) = sim.ground_truth()
-            x, y = pose.position[:2]
-            yaw = quaternion_yaw(pose.orientation)
-            speed = linear[0] * math.cos(yaw) + linear[1] * math.sin(yaw)       # forward, signed
-            clearance = min(clearance, sim.clearance(CLEARANCE_LOOKOUT_M))
-            path_m += math.hypot(x - last_xy[0], y - last_xy[1])
-            if now > last_t:
-                peak_decel = max(peak_decel, (abs(last_speed) - abs(speed)) / (now - last_t))
-            last_xy, last_speed, last_t = (x, y), speed, now
-            if trajectory is not None:
-                trajectory.append((now, x, y, yaw, speed, command[0], command[1], controller.mode))
-            at_rest = abs(speed) < REST_MPS and abs(angular[2]) < REST_RADPS and command == (0.0, 0.0)
-            rest_since = (rest_since if rest_since is not None else now) if at_rest else None
-            if controller.finished and at_rest:
-                ended_s = now
-                break
-            if rest_since is not None and controller.ends_at_rest and now - rest_since >= REST_HOLD_S:
-                ended_s = rest_since
-                break
-        if sent is not None:
-            pending.append((k + delay, validate_command(*sent)))
-        while pending and pending[0][0] <= k:
-            _, cmd = pending.pop(0)
-            command = (cmd.linear_x, cmd.angular_z)
-            sim.command(cmd)
-        if k == last:
-            break           # judged at the time limit, not a step past it
-        sim.step()
-        now_touching = sim.contacts_with_obstacles()
-        contacts += len(now_touching - touching)      # a contact counts once, when it begins
-        touching = now_touching
-        if contacts and spec.end_on_contact:
-            ended_s = sim.time_s
-            break
-    pose, _ = sim.ground_truth()
-    final = (pose.position[0], pose.position[1], quaternion_yaw(pose.orientation))
-    error = None if goal_world is None else math.hypot(goal_world[0] - final[0], goal_world[1] - final[1])
-    if contacts:
-        outcome = 'collided'
-    elif controller.mode == 'REACHED':
-        outcome = 'reached' if error is not None and error <= SUCCESS_RADIUS_M else 'failed'
-    elif controller.mode == 'FAILED':
-        outcome = 'failed'
-    elif ended_s is not None:
-        outcome = 'stopped'
-    else:
-        outcome = 'timed_out'
-    return EpisodeResult(outcome, controller.mode, ended_s if ended_s is not None else sim.time_s, contacts,
-                         clearance, final, error, path_m, peak_decel, trajectory=trajectory)
+def judge_settings(spec, controller_class):
+    """The judge's settings for ``spec``: its time limit and end on contact, and whether the controller ends
+    at rest (a stop controller) or waits and goes on (a navigator)."""
+    return JudgeSettings(success_radius=SUCCESS_RADIUS_M, time_limit=spec.time_limit_s,
+                         end_at_rest=controller_class.ends_at_rest if controller_class else True,
+                         end_on_contact=spec.end_on_contact)
+
+
+def result_from_verdict(verdict, **extra):
+    """An :class:`EpisodeResult` with the :class:`closed_loop.batch.judge.Verdict`'s fields."""
+    fields = {f.name: getattr(verdict, f.name) for f in dataclasses.fields(verdict)
+              if f.name in EpisodeResult.__dataclass_fields__}
+    return EpisodeResult(**dict(fields, **extra))

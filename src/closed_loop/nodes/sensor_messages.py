@@ -12,7 +12,7 @@ import rospy
 from geometry_msgs.msg import Quaternion, TransformStamped
 from nav_msgs.msg import Odometry
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
-from std_msgs.msg import String, UInt32
+from std_msgs.msg import Float32, String, UInt32
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -164,3 +164,8 @@ def contact_messages(node, contacts, began, stamp):
                       stamp.to_sec())
         out += [('contact', String(name)), ('contact_count', UInt32(contacts.count))]
     return out
+
+
+def clearance_messages(_node, _clearance, reading, stamp):
+    """std_msgs/Float32: the ground-truth clearance (m; +inf beyond the lookout)."""
+    return [('clearance', Float32(reading))]

@@ -11,7 +11,7 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
-from std_msgs.msg import String, UInt32
+from std_msgs.msg import Float32, String, UInt32
 from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
@@ -23,6 +23,7 @@ from closed_loop.nodes.common import LOG_PERIOD_S, init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
 from closed_loop.sim.scheduler import Schedule, SchedulingSettings
 from closed_loop.sim.sensors.camera import Camera
+from closed_loop.sim.sensors.clearance import Clearance
 from closed_loop.sim.sensors.contacts import Contacts
 from closed_loop.sim.sensors.lidar import Lidar
 from closed_loop.sim.sensors.odometry import Odometry as OdometrySensor
@@ -40,6 +41,7 @@ SensorLine = namedtuple('SensorLine', 'sensor publications convert lazy clock_fi
 SENSORS = (
     SensorLine(Contacts, (('contact', String, 10, False), ('contact_count', UInt32, 1, True)),
                to_msgs.contact_messages, False, False, False),
+    SensorLine(Clearance, (('clearance', Float32, 10, False),), to_msgs.clearance_messages, True, False, False),
     SensorLine(OdometrySensor, (('odom', Odometry, 10, False), ('/tf', TFMessage, 20, False),
                                 ('base_pose_ground_truth', Odometry, 10, False)),
                to_msgs.odometry_messages, True, False, False),
@@ -186,6 +188,8 @@ class SimNode:
             ``~joint_states_rate_hz``.
         contact (std_msgs/String): an obstacle's name each time the robot starts touching it.
         contact_count (std_msgs/UInt32, latched): contacts begun since start or the last reset.
+        clearance (std_msgs/Float32): the least distance (m) between the robot's collision shapes and any
+            obstacle, by the physics (ground truth, for judging), while someone listens.
     Services:
         ~reset_world, ~pause_physics, ~unpause_physics (std_srvs/Empty).
     Parameters: :class:`closed_loop.sim.simulation.SimSettings` (world, robot, drive),

@@ -1,0 +1,189 @@
+"""The judge: what a scenario's robot did, decided on ground truth, with one set of rules for an in-process
+episode (``closed_loop.batch.episode``) and a ROS graph (the ``scenario_judge`` node). Free of ROS.
+
+It is given, on simulated time: the robot's true state at its own period (:meth:`Judge.due`,
+:meth:`Judge.observe`: pose, forward speed, yaw rate, the command the base was given, and the controller's
+mode where it has one), each contact as it begins, and the least clearance between the robot's collision
+shapes and any obstacle. It says when the scenario is over (:attr:`Judge.ended`) and gives the
+:class:`Verdict`.
+
+The rules. The robot is *at rest* when its speed and yaw rate are under ``rest_speed`` and
+``rest_yaw_rate`` and the command is zero (no command counts as zero: the base brakes without one). The
+scenario ends: at the first contact, with ``end_on_contact``; when the controller says REACHED or FAILED
+and the robot is at rest; when it has been at rest for ``rest_hold`` within ``success_radius`` of the
+goal; when it has been at rest for ``rest_hold`` anywhere, with ``end_at_rest`` (a controller that stops
+for good; a navigator that waits sets it false); at ``time_limit``. The outcome: ``collided`` with any
+contact, whatever else; ``reached`` when the controller said REACHED within ``success_radius`` of the goal,
+or the robot came to rest there; ``failed`` when the controller said FAILED, or REACHED elsewhere;
+``stopped`` when it came to rest elsewhere; ``timed_out`` otherwise.
+"""
+import dataclasses
+import math
+from typing import Optional
+
+from closed_loop.settings import param
+
+OUTCOMES = ('reached', 'stopped', 'failed', 'timed_out', 'collided', 'error')
+REACHED, FAILED = 'REACHED', 'FAILED'
+
+
+@dataclasses.dataclass
+class JudgeSettings:
+    """How a scenario is judged (the ``scenario_judge`` node's ``~parameters``; an episode's from its spec)."""
+    success_radius: float = param(0.4, 'm', 'the goal counts as reached with ground truth this close to it',
+                                  minimum=0.0, exclusive_minimum=True)
+    time_limit: float = param(60.0, 's', 'the scenario ends at this simulated time', minimum=0.0,
+                              exclusive_minimum=True)
+    rest_speed: float = param(1e-3, 'm/s', 'at rest: ground-truth speed under this (and the yaw rate under '
+                              'rest_yaw_rate, under a zero command)', minimum=0.0, exclusive_minimum=True)
+    rest_yaw_rate: float = param(1e-3, 'rad/s', 'at rest: ground-truth yaw rate under this', minimum=0.0,
+                                 exclusive_minimum=True)
+    rest_hold: float = param(1.0, 's', 'at rest this long ends the scenario (see end_at_rest)', minimum=0.0)
+    end_at_rest: bool = param(True, '', 'true: at rest for rest_hold anywhere ends it (stopped); false: only '
+                              'within success_radius of the goal (a navigator that waits and goes on)')
+    end_on_contact: bool = param(False, '', 'end at the first contact (outcome collided)')
+    period: float = param(0.1, 's', 'ground truth is judged at this period of simulated time', minimum=0.01,
+                          maximum=1.0)
+
+
+@dataclasses.dataclass
+class Verdict:
+    """What the robot did. ``time_s``: when it came to rest or ended; ``final_pose``: ground truth (x, y, yaw)
+    in the world frame; ``goal_error_m``: its distance to the goal (None without one); ``commands``: how many
+    commands the base was given; ``why``: one line."""
+    outcome: str
+    mode: Optional[str] = None
+    time_s: float = 0.0
+    contacts: int = 0
+    min_clearance_m: float = math.inf
+    final_pose: tuple = (math.nan, math.nan, math.nan)
+    goal_error_m: Optional[float] = None
+    path_m: float = 0.0
+    peak_decel_mps2: float = 0.0
+    commands: int = 0
+    why: str = ''
+
+    def to_dict(self):
+        """Plain values (JSON: an infinite clearance is null)."""
+        data = dataclasses.asdict(self)
+        data['final_pose'] = list(self.final_pose)
+        if not math.isfinite(self.min_clearance_m):
+            data['min_clearance_m'] = None
+        return data
+
+    @classmethod
+    def from_dict(cls, data):
+        data = dict(data)
+        data['final_pose'] = tuple(data['final_pose'])
+        if data.get('min_clearance_m') is None:
+            data['min_clearance_m'] = math.inf
+        return cls(**data)
+
+
+class Judge:
+    """See the module's docstring. ``goal``: (x, y) in the world frame, or None."""
+
+    def __init__(self, settings, goal=None):
+        self.settings = settings
+        self.goal = None if goal is None else (float(goal[0]), float(goal[1]))
+        self.contacts = 0
+        self.commands = 0
+        self.clearance = math.inf
+        self.path_m = 0.0
+        self.peak_decel = 0.0
+        self.mode = None
+        self.ended = False
+        self.ended_s = None
+        self._next_s = 0.0
+        self._last = None            # (t, x, y, speed) of the last observation
+        self._pose = None
+        self._rest_since = None
+        self._rest_end = False       # ended by resting (not by time or contact)
+
+    def due(self, t_s):
+        """True when ground truth at ``t_s`` is to be observed (every ``period`` s of simulated time)."""
+        return not self.ended and t_s >= self._next_s - 1e-9
+
+    def on_contact(self, t_s, count=1):
+        """``count`` contacts began at ``t_s``."""
+        self.contacts += count
+        if count and self.settings.end_on_contact and not self.ended:
+            self._end(t_s)
+
+    def on_command(self):
+        """The base was given a command."""
+        self.commands += 1
+
+    def on_clearance(self, clearance_m):
+        self.clearance = min(self.clearance, clearance_m)
+
+    def goal_error(self, x, y):
+        return None if self.goal is None else math.hypot(self.goal[0] - x, self.goal[1] - y)
+
+    def observe(self, t_s, x, y, yaw, speed, yaw_rate, command=None, mode=None):
+        """The robot's ground truth at ``t_s``: pose (m, rad) in the world frame, forward speed (m/s, signed),
+        yaw rate (rad/s), the command the base has (m/s, rad/s; None: none), the controller's mode (None:
+        none). Returns True once the scenario is over."""
+        s = self.settings
+        self._next_s = t_s + s.period
+        self.mode = mode if mode is not None else self.mode
+        if self._last is not None:
+            t0, x0, y0, speed0 = self._last
+            self.path_m += math.hypot(x - x0, y - y0)
+            if t_s > t0:
+                self.peak_decel = max(self.peak_decel, (abs(speed0) - abs(speed)) / (t_s - t0))
+        self._last = (t_s, x, y, speed)
+        self._pose = (x, y, yaw)
+        zero = command is None or (command[0] == 0.0 and command[1] == 0.0)
+        at_rest = abs(speed) < s.rest_speed and abs(yaw_rate) < s.rest_yaw_rate and zero
+        self._rest_since = (self._rest_since if self._rest_since is not None else t_s) if at_rest else None
+        error = self.goal_error(x, y)
+        near_goal = error is not None and error <= s.success_radius
+        if self.ended:
+            return True
+        if self.mode in (REACHED, FAILED) and at_rest:
+            self._end(t_s)
+        elif self._rest_since is not None and t_s - self._rest_since >= s.rest_hold - 1e-9 \
+                and (near_goal or s.end_at_rest):
+            self._rest_end = True
+            self._end(self._rest_since)
+        elif t_s >= s.time_limit - 1e-9:
+            self._end(t_s)
+        return self.ended
+
+    def _end(self, t_s):
+        self.ended, self.ended_s = True, t_s
+
+    def verdict(self, t_s, final_pose=None):
+        """The :class:`Verdict` at ``t_s`` (the end, or now for a scenario cut short); ``final_pose``: ground
+        truth (x, y, yaw) then (default: the last observed)."""
+        pose = final_pose or self._pose or (math.nan, math.nan, math.nan)
+        error = self.goal_error(pose[0], pose[1])
+        near_goal = error is not None and error <= self.settings.success_radius
+        if self.contacts:
+            outcome = 'collided'
+        elif self.mode == REACHED:
+            outcome = 'reached' if near_goal else 'failed'
+        elif self.mode == FAILED:
+            outcome = 'failed'
+        elif self._rest_end:
+            outcome = 'reached' if near_goal else 'stopped'
+        else:
+            outcome = 'timed_out'
+        time_s = self.ended_s if self.ended_s is not None else t_s
+        return Verdict(outcome, self.mode, time_s, self.contacts, self.clearance, tuple(pose), error,
+                       self.path_m, self.peak_decel, self.commands, self.describe(outcome, time_s, pose, error))
+
+    def describe(self, outcome, time_s, pose, error):
+        """The verdict in one line: what, where, when, how close it came, contacts."""
+        line = '%s at (%.2f, %.2f) after %.1f s: least clearance %s, %d contact%s' % (
+            outcome, pose[0], pose[1], time_s,
+            'over the lookout' if not math.isfinite(self.clearance) else '%.3f m' % self.clearance,
+            self.contacts, '' if self.contacts == 1 else 's')
+        if error is not None:
+            line += ', goal %.2f m away' % error
+        if self.mode is not None:
+            line += ', mode %s' % self.mode
+        if not self.commands:
+            line += '; no command ever reached the base'
+        return line

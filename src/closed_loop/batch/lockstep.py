@@ -1,0 +1,135 @@
+"""An episode in one process: the simulation and a controller's core (``closed_loop.controllers``) stepped in
+lockstep, deterministic, free of ROS, and judged by the judge (``closed_loop.batch.judge``).
+
+Timing, as the graph has it, on simulated time: physics at ``physics_rate_hz``; a LIDAR scan every period,
+handed to the controller at its stamp (in the graph it arrives a few milliseconds of wall time later,
+within the physics step); the controller's timer at its ``rate_hz``, ``timer_phase_s`` (default 0.05 s,
+half a LIDAR period: the mean of a phase the node's start-up puts anywhere) after each scan; a command,
+from the timer or at once from a scan (new danger), reaches the wheels ``command_delay_s`` later. That
+delay is one physics step: the reaction benchmark (``bench_loop``) measures scan-to-zero-command delivery
+of a few milliseconds at real time, and the simulator applies a command at its next physics step. The
+camera is on only for a controller that looks at it; its frames come half a period after the scans, as the
+simulator node has them, and each frame with red in it gives the controller a detection, as vision_node
+does. The LIDAR is cast with the planar caster (``closed_loop.sim.planar_rays``): exact, and many times
+cheaper in clutter.
+
+What is judged comes from ground truth, as the simulator node publishes it to the scenario judge: contacts
+every physics step (the simulator's own contact sensor), and the pose, the speeds and the least clearance
+at the judge's period.
+"""
+import math
+import time
+
+import cv2
+
+from closed_loop.batch.episode import judge_settings, result_from_verdict
+from closed_loop.batch.judge import Judge
+from closed_loop.commands import validate_command
+from closed_loop.control.scan import Scan
+from closed_loop.control.vision import VisionSettings, detect_red
+from closed_loop.controllers import Context, Odom
+from closed_loop.geometry import quaternion_yaw
+from closed_loop.sim.rig import Rig
+from closed_loop.sim.sensors.camera import Camera
+from closed_loop.sim.sensors.clearance import Clearance
+from closed_loop.sim.sensors.contacts import Contacts
+from closed_loop.sim.sensors.lidar import Lidar
+
+
+def run_in_process(spec, prepared):
+    """Run the episode ``spec``, resolved as ``prepared`` (``closed_loop.batch.episode.prepare``)."""
+    started = time.monotonic()
+    p = prepared
+    laser_pose = p.profile.laser_pose(p.settings.scan_frame)
+    rig = Rig(p.world, p.sim_params, p.profile.urdf)
+    try:
+        try:
+            camera_pose = p.profile.laser_pose(rig.sim.model.names.camera_frame)
+        except ValueError:
+            camera_pose = None
+        controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, p.goal_odom,
+                                                            camera_pose), *p.extra_settings)
+        controller.record_timings = True
+        judge = Judge(judge_settings(spec, p.controller_class), p.goal_world)
+        trajectory = [] if spec.keep_trajectory else None
+        _loop(spec, rig, controller, judge, trajectory)
+        verdict = judge.verdict(rig.sim.time_s, _pose(rig.sim))
+    finally:
+        rig.close()
+    return result_from_verdict(verdict, decision_ms=getattr(controller, 'decision_ms', []),
+                               timings=dict(getattr(controller, 'timings', {})), trajectory=trajectory,
+                               wall_s=time.monotonic() - started)
+
+
+def _pose(sim):
+    pose, _ = sim.ground_truth()
+    return pose.position[0], pose.position[1], quaternion_yaw(pose.orientation)
+
+
+def _loop(spec, rig, controller, judge, trajectory):
+    sim = rig.sim
+    lidar = rig.sensors[Lidar]
+    contacts = rig.sensors[Contacts]
+    lookout = rig.sensors[Clearance].settings.clearance_lookout
+    layout, ls = lidar.layout, lidar.settings
+    dt = sim.dt_s
+    steps_per_scan = max(1, int(round(lidar.period_s / dt)))
+    steps_per_tick = max(1, int(round(1.0 / controller.settings.rate_hz / dt)))
+    phase = int(round(spec.timer_phase_s / dt)) % steps_per_tick
+    delay = max(1, int(round(spec.command_delay_s / dt)))
+    camera = rig.sensors.get(Camera) if controller.uses_camera else None
+    if camera is not None:
+        steps_per_frame = max(1, int(round(camera.period_s / dt)))
+        frame_phase = int(round(camera.offset_s / dt)) % steps_per_frame
+        vision = VisionSettings()
+        controller.on_camera_info(camera.intrinsics.fx, camera.intrinsics.cx, camera.intrinsics.width)
+    pending = []                      # (step, command), in order
+    command = (0.0, 0.0)
+    last = int(round(spec.time_limit_s / dt))
+    for k in range(last + 1):
+        now = sim.time_s
+        sent = odom = None
+        scan_due, frame_due = k % steps_per_scan == 0, camera is not None and k % steps_per_frame == frame_phase
+        tick_due = k % steps_per_tick == phase
+        if scan_due or frame_due or tick_due:
+            odo = sim.odometry
+            odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
+        if scan_due:
+            scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
+                        lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
+            sent = controller.on_scan(now, scan, odom)
+        if frame_due:
+            # What vision_node does in the graph: a red_centroid only for a frame with red in it.
+            found = detect_red(cv2.cvtColor(camera.sample(sim), cv2.COLOR_RGB2BGR), vision)
+            if found.detected:
+                controller.on_detection(found.centroid_px[0], now, odom)
+        if tick_due:
+            sent = controller.on_tick(now, odom)
+            controller.take_transitions()       # what the node logs; an episode keeps only the mode
+        if (judge.due(now) or k == last) and _judge(sim, judge, now, command, controller.mode, lookout, trajectory):
+            return
+        if sent is not None:
+            pending.append((k + delay, validate_command(*sent)))
+        while pending and pending[0][0] <= k:
+            _, cmd = pending.pop(0)
+            command = (cmd.linear_x, cmd.angular_z)
+            sim.command(cmd)
+            judge.on_command()
+        sim.step()
+        began = contacts.sample(sim)
+        if began:
+            judge.on_contact(sim.time_s, len(began))
+            if judge.ended:
+                return
+
+
+def _judge(sim, judge, now, command, mode, lookout, trajectory):
+    """Show the judge the robot's ground truth now; True once the episode is over."""
+    pose, (linear, angular) = sim.ground_truth()
+    x, y = pose.position[:2]
+    yaw = quaternion_yaw(pose.orientation)
+    speed = linear[0] * math.cos(yaw) + linear[1] * math.sin(yaw)       # forward, signed
+    judge.on_clearance(sim.clearance(lookout))
+    if trajectory is not None:
+        trajectory.append((now, x, y, yaw, speed, command[0], command[1], mode))
+    return judge.observe(now, x, y, yaw, speed, angular[2], command, mode)
