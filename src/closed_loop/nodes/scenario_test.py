@@ -1,0 +1,60 @@
+"""scenario_test: a rostest test node that waits for the scenario judge's verdict and checks it against what
+the test file says must hold. The judging is scenario_judge's; this only compares."""
+import json
+import math
+import threading
+import unittest
+
+import rospy
+import rostest
+from std_msgs.msg import String
+
+#: How long to wait for the verdict (s of wall time) unless ~wait says; rostest's time-limit also applies.
+DEFAULT_WAIT_S = 600.0
+
+
+def expectations():
+    """What must hold, from the node's parameters: ``~expect`` (an outcome, or several separated by commas;
+    default reached), ``~max_contacts`` (default 0), ``~min_clearance`` (m; default none), ``~within`` (s of
+    simulated time; default none)."""
+    outcomes = [o.strip() for o in str(rospy.get_param('~expect', 'reached')).split(',') if o.strip()]
+    return {'outcomes': outcomes, 'max_contacts': int(rospy.get_param('~max_contacts', 0)),
+            'min_clearance': rospy.get_param('~min_clearance', None), 'within': rospy.get_param('~within', None)}
+
+
+def problems(verdict, expect):
+    """What of ``expect`` the verdict (a dict) breaks, as phrases; [] when all holds."""
+    found = []
+    if verdict['outcome'] not in expect['outcomes']:
+        found.append('outcome %s, expected %s' % (verdict['outcome'], ' or '.join(expect['outcomes'])))
+    if verdict['contacts'] > expect['max_contacts']:
+        found.append('%d contacts, at most %d allowed' % (verdict['contacts'], expect['max_contacts']))
+    clearance = verdict['min_clearance_m'] if verdict['min_clearance_m'] is not None else math.inf
+    if expect['min_clearance'] is not None and clearance < expect['min_clearance']:
+        found.append('least clearance %.3f m, at least %.3f m required' % (clearance, expect['min_clearance']))
+    if expect['within'] is not None and verdict['time_s'] > expect['within']:
+        found.append('after %.1f s, within %.1f s required' % (verdict['time_s'], expect['within']))
+    return found
+
+
+class Scenario(unittest.TestCase):
+    def test_the_verdict_is_what_the_test_expects(self):
+        rospy.init_node('scenario_test')
+        expect = expectations()
+        topic = rospy.get_param('~verdict_topic', '/scenario_judge/verdict')
+        got = threading.Event()
+        box = {}
+
+        def on_verdict(msg):
+            box['verdict'] = json.loads(msg.data)
+            got.set()
+        rospy.Subscriber(topic, String, on_verdict, queue_size=1)
+        wait_s = float(rospy.get_param('~wait', DEFAULT_WAIT_S))
+        self.assertTrue(got.wait(wait_s), 'no verdict on %s within %g s of wall time' % (topic, wait_s))
+        verdict = box['verdict']
+        found = problems(verdict, expect)
+        self.assertFalse(found, '%s; the robot: %s' % ('; '.join(found), verdict['why']))
+
+
+def main():
+    rostest.rosrun('closed_loop', 'scenario_test', Scenario)
