@@ -26,7 +26,7 @@ from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 
 RESULT_COLUMNS = ('outcome', 'mode', 'time_s', 'contacts', 'min_clearance_m', 'final_x', 'final_y', 'final_yaw',
-                  'goal_error_m', 'path_m', 'peak_decel_mps2', 'wall_s', 'error')
+                  'goal_error_m', 'path_m', 'peak_decel_mps2', 'wall_s', 'error', 'why', 'logs')
 _CACHE = {}     # per worker process: worlds and profiles loaded once
 
 
@@ -35,14 +35,16 @@ def row_key(spec):
     return json.dumps(spec.to_dict(), sort_keys=True)
 
 
-def run_row(spec_fields):
-    """One episode on a worker: the result columns (never raises; an episode that did is outcome 'error')."""
+def run_row(spec_fields, logs_root=None):
+    """One episode on a worker: the result columns (never raises; an episode that did is outcome 'error').
+    A graph episode's folder goes under ``logs_root``."""
     try:
-        r = run_episode(EpisodeSpec.from_dict(spec_fields), _CACHE)
+        r = run_episode(EpisodeSpec.from_dict(spec_fields), _CACHE, logs_root)
         row = {'outcome': r.outcome, 'mode': r.mode, 'time_s': r.time_s, 'contacts': r.contacts,
                'min_clearance_m': r.min_clearance_m, 'final_x': r.final_pose[0], 'final_y': r.final_pose[1],
                'final_yaw': r.final_pose[2], 'goal_error_m': r.goal_error_m, 'path_m': r.path_m,
-               'peak_decel_mps2': r.peak_decel_mps2, 'wall_s': r.wall_s, 'error': ''}
+               'peak_decel_mps2': r.peak_decel_mps2, 'wall_s': r.wall_s, 'error': r.error or '', 'why': r.why,
+               'logs': r.logs or ''}
         if r.trajectory is not None:
             row['trajectory'] = r.trajectory
         return row
@@ -126,8 +128,9 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
         if todo:
             client, cluster = _client(scheduler, workers)
             try:
-                futures = {client.submit(run_row, s.to_dict(), key='episode-%d-%s' % (i, _digest(s)), pure=False):
-                           (i, a, s) for i, a, s in todo}
+                logs_root = os.path.abspath(os.path.join(output, 'graphs'))
+                futures = {client.submit(run_row, s.to_dict(), logs_root, key='episode-%d-%s' % (i, _digest(s)),
+                                         pure=False): (i, a, s) for i, a, s in todo}
                 for future in distributed.as_completed(futures):
                     i, assignment, spec = futures.pop(future)
                     result = future.result()

@@ -17,8 +17,9 @@ anything runs. Free of ROS.
 
 A grid key is an EpisodeSpec field (``world``, ``robot``, ``controller``, ``seed``, ``scan_noise``,
 ``goal``, ``time_limit_s``, ...), or ``settings.NAME`` (a controller ``~parameter``), ``sim.NAME`` (a
-simulator or sensor ``~parameter``) or ``world.generator.NAME`` (a ``closed_loop.sim.clutter.ClutterSettings``
-field). Its values are a list, or ``{from, to, step}`` (both ends included). Every combination is then
+simulator or sensor ``~parameter``), ``args.NAME`` (an arg of a graph controller's launch file,
+``controller: {launch: PKG/path.launch}``) or ``world.generator.NAME`` (a
+``closed_loop.sim.clutter.ClutterSettings`` field). Its values are a list, or ``{from, to, step}`` (both ends included). Every combination is then
 checked as an episode would be (the controller's settings by the class its node uses, the world loaded or
 its generator's settings checked); the first problem is an error that names the file, the field and what
 was expected.
@@ -64,15 +65,15 @@ def _values(source, key, raw):
 
 def _check_key(source, key):
     head, _, rest = key.partition('.')
-    if head in ('settings', 'sim') and rest and '.' not in rest:
+    if head in ('settings', 'sim', 'args') and rest and '.' not in rest:
         return
     if key.startswith('world.generator.') and key.count('.') == 2:
         return
     if key in SPEC_FIELDS and key not in ('settings', 'sim'):
         return
-    raise SweepError('%s: grid.%s: expected an episode field (%s), settings.NAME, sim.NAME or '
-                     'world.generator.NAME' % (source, key, ', '.join(f for f in SPEC_FIELDS
-                                                                    if f not in ('settings', 'sim'))))
+    raise SweepError('%s: grid.%s: expected an episode field (%s), settings.NAME, sim.NAME, args.NAME (a graph '
+                     "controller's launch arg) or world.generator.NAME"
+                     % (source, key, ', '.join(f for f in SPEC_FIELDS if f not in ('settings', 'sim'))))
 
 
 def apply(base, assignment):
@@ -82,6 +83,12 @@ def apply(base, assignment):
         head, _, rest = key.partition('.')
         if head in ('settings', 'sim'):
             fields[head] = dict(fields.get(head) or {}, **{rest: value})
+        elif head == 'args':
+            controller = fields.get('controller')
+            if not isinstance(controller, dict) or 'launch' not in controller:
+                raise SweepError('grid.%s: args vary a launch file\'s args: the base needs controller: '
+                                 '{launch: PKG/path.launch}' % key)
+            fields['controller'] = dict(controller, args=dict(controller.get('args') or {}, **{rest: value}))
         elif head == 'world' and rest:
             world = fields.get('world')
             generator = dict(world['generator']) if isinstance(world, dict) and 'generator' in world else {}

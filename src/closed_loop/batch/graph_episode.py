@@ -1,0 +1,212 @@
+"""Graph episodes: an episode whose controller is a ROS graph, for a controller that is not one of this
+package's cores (a node of yours, in Python or C++), or one of ours run as its node. Free of rospy: the graph
+is other processes.
+
+Each graph episode is a real graph of its own: a master on a free loopback port (``graph_keeper``), its
+own ``ROS_HOME`` and log folder, the simulator (``sim.launch``, on simulated time at ``real_time_factor``),
+``robot_state_publisher``, the controller (a launch file of yours with its args, or a node of this package
+with its settings), and the scenario judge, whose verdict (``closed_loop.batch.judge``, the rules of every
+episode) is the result. Its row has the columns of an in-process episode, and ``logs``, the episode's folder
+(the generated launch file, the graph's output, each node's log). What goes wrong is an ``error`` result that
+says what: a launch that does not start, a node that dies, no verdict in time. When it is over, the graph is
+shut down and everything left of it killed, whatever happened.
+"""
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from xml.sax.saxutils import quoteattr
+
+import yaml
+
+from closed_loop.batch import graph_keeper
+from closed_loop.batch.episode import EpisodeError, judge_settings, result_from_verdict
+from closed_loop.batch.judge import Verdict
+from closed_loop.sim import clutter
+
+#: Simulated s per wall s in a graph episode, unless the spec says: the fastest at which a graph episode
+#: still agrees with real time (docs/episodes.md, "Graph episodes": measured).
+REAL_TIME_FACTOR = 2.0
+#: Wall time (s) a graph gets to start, and its slack beyond the scenario's simulated time.
+STARTUP_S, SLACK_S = 40.0, 20.0
+#: After the verdict or an error, how long the keeper gets to shut the graph down (s).
+SHUTDOWN_S = graph_keeper.GRACE_S + 10.0
+#: How many lines of a log an error quotes.
+TAIL_LINES = 8
+CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest')
+PACKAGE = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
+ARG_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
+DIED = re.compile(r'\[([^\]\s]+?)-\d+\] process has died \[pid \d+, exit code (-?\d+)')
+#: One graph at a time in a process (a Dask worker runs one episode at a time; this holds it to that).
+_ONE_GRAPH = threading.Lock()
+
+
+def parse_controller(value, node_names):
+    """A graph controller from an episode's ``controller`` mapping: ``{launch: PKG/path.launch or /abs/path,
+    args: {NAME: VALUE}}`` or ``{node: NAME}`` (one of ``node_names``), with optional ``mode_topic`` (the
+    controller's mode, for the judge) and ``end_at_rest``; raises EpisodeError naming the field."""
+    unknown = sorted(set(value) - set(CONTROLLER_KEYS))
+    if unknown:
+        raise EpisodeError('controller.%s: expected one of %s' % (unknown[0], ', '.join(CONTROLLER_KEYS)))
+    if ('launch' in value) == ('node' in value):
+        raise EpisodeError('controller: expected a launch file (launch: PKG/path.launch) or a node of this package '
+                           '(node: NAME), one of them, got %r' % (value,))
+    if 'node' in value and value['node'] not in node_names:
+        raise EpisodeError('controller.node: expected one of %s, got %r' % (', '.join(sorted(node_names)), value['node']))
+    if 'launch' in value:
+        launch = value['launch']
+        if not isinstance(launch, str) or not launch.endswith(('.launch', '.xml')):
+            raise EpisodeError('controller.launch: expected PKG/path/file.launch or an absolute path, got %r' % (launch,))
+        parts = launch.split('/')
+        if not os.path.isabs(launch) and (not PACKAGE.match(parts[0]) or len(parts) < 2 or '..' in parts):
+            raise EpisodeError('controller.launch: expected PKG/path/file.launch (a package name, then a path in '
+                               'it) or an absolute path, got %r' % (launch,))
+    args = value.get('args') or {}
+    if not isinstance(args, dict) or 'node' in value and args:
+        raise EpisodeError('controller.args: expected a mapping of a launch file\'s args, got %r' % (args,))
+    for name, arg in args.items():
+        if not isinstance(name, str) or not ARG_NAME.match(name):
+            raise EpisodeError('controller.args: %r is not an arg name' % (name,))
+        if not isinstance(arg, (str, int, float, bool)):
+            raise EpisodeError('controller.args.%s: expected a string, number or boolean, got %r' % (name, arg))
+    if not isinstance(value.get('mode_topic', ''), str) or not isinstance(value.get('end_at_rest', True), bool):
+        raise EpisodeError('controller: mode_topic is a topic name and end_at_rest true or false')
+    return value
+
+
+def _launch_path(launch):
+    if os.path.isabs(launch):
+        return launch
+    package, _, rest = launch.partition('/')
+    return '$(find %s)/%s' % (package, rest)
+
+
+def _value(value):
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def launch_text(spec, prepared, folder):
+    """The launch file of the episode's graph: scenario.launch with the episode's world, robot, goal and judge,
+    the simulator's parameters, and the controller."""
+    p, c = prepared, prepared.graph
+    world = spec.world
+    if isinstance(world, dict):                                     # a generated world: a file of its own
+        world = os.path.join(folder, 'world.yaml')
+        settings = clutter.ClutterSettings(**dict({'profile': p.profile.name}, **spec.world['generator']))
+        with open(world, 'w') as f:
+            yaml.safe_dump(clutter.generate(settings.check(), p.profile), f, sort_keys=False)
+    elif os.path.isfile(world):
+        world = os.path.abspath(world)
+    judge = judge_settings(spec, p.controller_class)
+    rtf = spec.real_time_factor or REAL_TIME_FACTOR
+    args = {'world': world, 'robot': spec.robot, 'real_time_factor': rtf, 'camera': p.sim_params['camera'],
+            'time_limit': judge.time_limit, 'end_on_contact': judge.end_on_contact,
+            'end_at_rest': c.get('end_at_rest', judge.end_at_rest), 'success_radius': judge.success_radius,
+            'verdict_file': os.path.join(folder, 'verdict.json')}
+    if p.goal_world is not None:
+        args['goal_x'], args['goal_y'] = p.goal_world
+    node = c.get('node')
+    if c.get('mode_topic') or node:
+        args['mode_topic'] = c.get('mode_topic') or '/%s/mode' % node
+    lines = ['<launch>', '  <include file="$(find closed_loop)/launch/scenario.launch">']
+    lines += ['    <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v))) for k, v in sorted(args.items())]
+    lines.append('  </include>')
+    # Every step's clock goes out, faster than real time too: the nodes' timers run on it.
+    sim = dict(p.sim_params, max_clock_rate_hz=p.sim_params.get('physics_rate_hz', 100.0) * max(rtf, 1.0))
+    sim.pop('camera')
+    lines += ['  <param name=%s value=%s/>' % (quoteattr('/sim/' + k), quoteattr(_value(v))) for k, v in sorted(sim.items())]
+    if node:
+        lines.append('  <node pkg="closed_loop" type=%s name=%s output="screen">' % (quoteattr(node), quoteattr(node)))
+        lines += ['    <param name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
+                  for s in [p.settings] + list(p.extra_settings) for k, v in sorted(vars(s).items())]
+        if p.goal_odom is not None and p.controller_class.uses_goal:
+            lines += ['    <param name="goal_x" value="%r"/>' % p.goal_odom[0], '    <param name="goal_y" value="%r"/>' % p.goal_odom[1]]
+        lines.append('  </node>')
+        if p.controller_class.uses_camera:
+            lines.append('  <node pkg="closed_loop" type="vision_node" name="vision_node"/>')
+    else:
+        lines.append('  <include file=%s>' % quoteattr(_launch_path(c['launch'])))
+        lines += ['    <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
+                  for k, v in sorted((c.get('args') or {}).items())]
+        lines.append('  </include>')
+    return '\n'.join(lines + ['</launch>', ''])
+
+
+def _tail(path, lines=TAIL_LINES):
+    try:
+        with open(path, errors='replace') as f:
+            return ' | '.join(line.rstrip()[:200] for line in f.read().splitlines()[-lines:] if line.strip())
+    except OSError:
+        return '(no log)'
+
+
+def _died(folder):
+    """(node name, exit code) of the first node the graph's output says died, or None."""
+    try:
+        with open(os.path.join(folder, 'graph.log'), errors='replace') as f:
+            match = DIED.search(f.read())
+    except OSError:
+        return None
+    return (match.group(1), int(match.group(2))) if match else None
+
+
+def _node_log(folder, name):
+    """The node's own log files' tail (roslaunch keeps them under the episode's ROS_LOG_DIR)."""
+    logs = sorted(os.path.join(d, f) for d, _, files in os.walk(os.path.join(folder, 'log'))
+                  for f in files if f.startswith(name + '-') and f.endswith('.log'))
+    return ' || '.join('%s: %s' % (os.path.basename(path), _tail(path)) for path in logs) or _tail(
+        os.path.join(folder, 'graph.log'))
+
+
+def run_graph(spec, prepared, logs_root=None):
+    """Run the graph episode ``spec`` (resolved as ``prepared``); its folder goes under ``logs_root``."""
+    started = time.monotonic()
+    if logs_root:
+        os.makedirs(logs_root, exist_ok=True)
+    with _ONE_GRAPH:
+        folder = tempfile.mkdtemp(prefix='episode-', dir=logs_root)
+        launch_file = os.path.join(folder, 'episode.launch')
+        with open(launch_file, 'w') as f:
+            f.write(launch_text(spec, prepared, folder))
+        env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'))
+        with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
+            keeper = subprocess.Popen([sys.executable, graph_keeper.__file__, folder, launch_file], stdin=subprocess.PIPE,
+                                      stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+        try:
+            verdict, error = _wait(spec, folder, keeper)
+        finally:
+            keeper.stdin.close()                 # the keeper shuts the graph down
+            try:
+                keeper.wait(SHUTDOWN_S)
+            except subprocess.TimeoutExpired:
+                os.killpg(keeper.pid, 9)
+                keeper.wait()
+    wall_s = time.monotonic() - started
+    if verdict is None:
+        return result_from_verdict(Verdict('error', why=error), error=error, logs=folder, wall_s=wall_s)
+    return result_from_verdict(verdict, logs=folder, wall_s=wall_s)
+
+
+def _wait(spec, folder, keeper):
+    """(the verdict, None) or (None, why there is none)."""
+    rtf = spec.real_time_factor or REAL_TIME_FACTOR
+    deadline = time.monotonic() + STARTUP_S + spec.time_limit_s / rtf + SLACK_S
+    verdict_file = os.path.join(folder, 'verdict.json')
+    while time.monotonic() < deadline:
+        if os.path.exists(verdict_file):
+            with open(verdict_file) as f:
+                return Verdict.from_dict(json.load(f)), None
+        died = _died(folder)
+        if died is not None:
+            return None, 'node %s died (exit code %d): %s' % (died[0], died[1], _node_log(folder, died[0]))
+        if keeper.poll() is not None:
+            if os.path.exists(os.path.join(folder, 'keeper_error')):
+                return None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))
+            return None, 'the launch ended before a verdict: %s' % _tail(os.path.join(folder, 'graph.log'))
+        time.sleep(0.2)
+    return None, 'no verdict within %.0f s of wall time: %s' % (
+        STARTUP_S + spec.time_limit_s / rtf + SLACK_S, _tail(os.path.join(folder, 'graph.log')))
