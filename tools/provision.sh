@@ -14,6 +14,7 @@ APT_PACKAGES=(
   python3-visualization-msgs python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs
   librostest-dev rosout rosbash ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
+  libroscpp-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -114,3 +114,39 @@ def drive_in_sim(env, tmp_path, controller_argv, watch_script, world='wall', tim
         stop(controller)
         stop(sim)
     return json.loads(watched.stdout.strip().splitlines()[-1])
+
+
+def fixture_workspace(tmp_path):
+    """test/fixtures/fixture_controllers built as a user builds a package of their own: copied into the src/
+    of a catkin workspace of its own, over this package's (the environment's), with catkin_make; returns
+    the environment with that workspace's setup.bash sourced."""
+    import shutil
+    workspace = tmp_path / 'fixture_ws'
+    shutil.copytree(os.path.join(ROOT, 'test', 'fixtures', 'fixture_controllers'),
+                    str(workspace / 'src' / 'fixture_controllers'))
+    build = subprocess.run(['catkin_make', '-C', str(workspace), '-DPYTHON_EXECUTABLE=' + sys.executable],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=600)
+    assert build.returncode == 0, build.stdout[-4000:]
+    sourced = subprocess.run(['bash', '-c', 'source "$1" && env -0', 'bash', str(workspace / 'devel' / 'setup.bash')],
+                             stdout=subprocess.PIPE, check=True, timeout=60).stdout.decode()
+    return dict(item.split('=', 1) for item in sourced.split('\0') if '=' in item)
+
+
+def graph_leftovers(root):
+    """What is left of the graph episodes whose folders are under ``root``: the processes that carry their
+    mark (running ones: a zombie has no environment left) and the masters still listening on their ports."""
+    import glob
+    from closed_loop.batch import graph_keeper
+    ports = [int(open(path).read()) for path in glob.glob(os.path.join(str(root), '**', 'port'), recursive=True)]
+    return {'processes': graph_keeper.marked_processes(str(root)), 'listening': [p for p in ports if master_up(p)]}
+
+
+def run_sweep(env, sweep_path, output, *extra, timeout_s=600):
+    """``python3 -m closed_loop.sweep SWEEP --output OUTPUT ...``; returns (the process, its rows by index)."""
+    import csv
+    done = subprocess.run([sys.executable, '-m', 'closed_loop.sweep', str(sweep_path), '--output', str(output)]
+                          + list(extra), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=timeout_s)
+    with open(os.path.join(str(output), 'rows.csv'), newline='') as f:
+        rows = {int(row['index']): row for row in csv.DictReader(f)}
+    return done, rows

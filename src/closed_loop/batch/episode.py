@@ -244,14 +244,14 @@ def prepare(spec, cache=None):
     return Prepared(profile, cls, world, settings, sim_params, goal, goal_world, extra, graph)
 
 
-def run_episode(spec, cache=None, logs_root=None):
+def run_episode(spec, cache=None, logs=None):
     """Run ``spec`` (an :class:`EpisodeSpec`): its controller's core in lockstep with the simulation
     (``closed_loop.batch.lockstep``), or a graph (``closed_loop.batch.graph_episode``, its folder under
-    ``logs_root``). An unusable spec raises :class:`EpisodeError`."""
+    ``logs``, a new folder if None). An unusable spec raises :class:`EpisodeError`."""
     prepared = prepare(spec, cache)
     if prepared.graph is not None:
         from closed_loop.batch.graph_episode import run_graph
-        return run_graph(spec, prepared, logs_root)
+        return run_graph(spec, prepared, logs)
     from closed_loop.batch.lockstep import run_in_process
     return run_in_process(spec, prepared)
 

@@ -41,6 +41,9 @@ CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest')
 PACKAGE = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
 ARG_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 DIED = re.compile(r'\[([^\]\s]+?)-\d+\] process has died \[pid \d+, exit code (-?\d+)')
+#: roslaunch's colours and terminal titles, which a quoted log line leaves out.
+ESCAPES = re.compile(r'\x1b\[[0-9;]*[A-Za-z]|\x1b\][^\x07]*\x07')
+CANNOT_LAUNCH = re.compile(r'ERROR: cannot launch node of type \[([^\]]+)\]: ([^\n]*)')
 #: One graph at a time in a process (a Dask worker runs one episode at a time; this holds it to that).
 _ONE_GRAPH = threading.Lock()
 
@@ -61,6 +64,9 @@ def parse_controller(value, node_names):
         launch = value['launch']
         if not isinstance(launch, str) or not launch.endswith(('.launch', '.xml')):
             raise EpisodeError('controller.launch: expected PKG/path/file.launch or an absolute path, got %r' % (launch,))
+        if '$(' in launch:
+            raise EpisodeError('controller.launch: %r has "$(" in it, which roslaunch would take for a substitution'
+                               % (launch,))
         parts = launch.split('/')
         if not os.path.isabs(launch) and (not PACKAGE.match(parts[0]) or len(parts) < 2 or '..' in parts):
             raise EpisodeError('controller.launch: expected PKG/path/file.launch (a package name, then a path in '
@@ -71,8 +77,9 @@ def parse_controller(value, node_names):
     for name, arg in args.items():
         if not isinstance(name, str) or not ARG_NAME.match(name):
             raise EpisodeError('controller.args: %r is not an arg name' % (name,))
-        if not isinstance(arg, (str, int, float, bool)):
-            raise EpisodeError('controller.args.%s: expected a string, number or boolean, got %r' % (name, arg))
+        if not isinstance(arg, (str, int, float, bool)) or '$(' in str(arg):
+            raise EpisodeError('controller.args.%s: expected a string, number or boolean (no $(...) substitution), '
+                               'got %r' % (name, arg))
     if not isinstance(value.get('mode_topic', ''), str) or not isinstance(value.get('end_at_rest', True), bool):
         raise EpisodeError('controller: mode_topic is a topic name and end_at_rest true or false')
     return value
@@ -112,9 +119,14 @@ def launch_text(spec, prepared, folder):
     node = c.get('node')
     if c.get('mode_topic') or node:
         args['mode_topic'] = c.get('mode_topic') or '/%s/mode' % node
-    lines = ['<launch>', '  <include file="$(find closed_loop)/launch/scenario.launch">']
-    lines += ['    <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v))) for k, v in sorted(args.items())]
-    lines.append('  </include>')
+    for name, value in args.items():
+        if '$(' in str(value):          # roslaunch would substitute (or eval) it
+            raise EpisodeError('%s: %r has "$(" in it, which roslaunch would take for a substitution' % (name, value))
+    # The args at the top, as scenario.launch's own: it and a controller's launch file both get them all
+    # (a launch file of yours may declare goal_x, goal_y, robot, world; it gets those it declares).
+    lines = ['<launch>'] + ['  <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
+                            for k, v in sorted(args.items())]
+    lines.append('  <include file="$(find closed_loop)/launch/scenario.launch" pass_all_args="true"/>')
     # Every step's clock goes out, faster than real time too: the nodes' timers run on it.
     sim = dict(p.sim_params, max_clock_rate_hz=p.sim_params.get('physics_rate_hz', 100.0) * max(rtf, 1.0))
     sim.pop('camera')
@@ -129,7 +141,7 @@ def launch_text(spec, prepared, folder):
         if p.controller_class.uses_camera:
             lines.append('  <node pkg="closed_loop" type="vision_node" name="vision_node"/>')
     else:
-        lines.append('  <include file=%s>' % quoteattr(_launch_path(c['launch'])))
+        lines.append('  <include file=%s pass_all_args="true">' % quoteattr(_launch_path(c['launch'])))
         lines += ['    <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
                   for k, v in sorted((c.get('args') or {}).items())]
         lines.append('  </include>')
@@ -139,19 +151,25 @@ def launch_text(spec, prepared, folder):
 def _tail(path, lines=TAIL_LINES):
     try:
         with open(path, errors='replace') as f:
-            return ' | '.join(line.rstrip()[:200] for line in f.read().splitlines()[-lines:] if line.strip())
+            text = ESCAPES.sub('', f.read())
+        kept = [line.rstrip()[:200] for line in text.splitlines() if line.strip()]
+        return ' | '.join(kept[-lines:])
     except OSError:
         return '(no log)'
 
 
-def _died(folder):
-    """(node name, exit code) of the first node the graph's output says died, or None."""
+def _failed(folder):
+    """What the graph's output says went wrong with a node: (node name, exit code) of the first that died,
+    or (node type, why) of one roslaunch could not start; None when neither."""
     try:
         with open(os.path.join(folder, 'graph.log'), errors='replace') as f:
-            match = DIED.search(f.read())
+            text = ESCAPES.sub('', f.read())
     except OSError:
         return None
-    return (match.group(1), int(match.group(2))) if match else None
+    died, cannot = DIED.search(text), CANNOT_LAUNCH.search(text)
+    if cannot:
+        return cannot.group(1), cannot.group(2).strip()
+    return (died.group(1), int(died.group(2))) if died else None
 
 
 def _node_log(folder, name):
@@ -162,17 +180,23 @@ def _node_log(folder, name):
         os.path.join(folder, 'graph.log'))
 
 
-def run_graph(spec, prepared, logs_root=None):
-    """Run the graph episode ``spec`` (resolved as ``prepared``); its folder goes under ``logs_root``."""
+def run_graph(spec, prepared, folder=None):
+    """Run the graph episode ``spec`` (resolved as ``prepared``) with its files in a new ``folder`` (None: a
+    temporary one). An earlier attempt's folder of that name (a worker that died, a resumed sweep) is kept
+    beside it as ``FOLDER.attempt-K``."""
     started = time.monotonic()
-    if logs_root:
-        os.makedirs(logs_root, exist_ok=True)
     with _ONE_GRAPH:
-        folder = tempfile.mkdtemp(prefix='episode-', dir=logs_root)
+        if folder is None:
+            folder = tempfile.mkdtemp(prefix='episode-')
+        else:
+            _set_aside(folder)
+            os.makedirs(folder)
         launch_file = os.path.join(folder, 'episode.launch')
         with open(launch_file, 'w') as f:
             f.write(launch_text(spec, prepared, folder))
-        env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'))
+        mark = os.path.abspath(folder) + os.sep
+        env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
+                   **{graph_keeper.MARK: mark})
         with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
             keeper = subprocess.Popen([sys.executable, graph_keeper.__file__, folder, launch_file], stdin=subprocess.PIPE,
                                       stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
@@ -185,10 +209,21 @@ def run_graph(spec, prepared, logs_root=None):
             except subprocess.TimeoutExpired:
                 os.killpg(keeper.pid, 9)
                 keeper.wait()
+            graph_keeper.kill_marked(mark)          # whatever the keeper could not
     wall_s = time.monotonic() - started
     if verdict is None:
+        c = prepared.graph
+        error = '%s: %s' % (c['launch'] if 'launch' in c else 'node ' + c['node'], error)
         return result_from_verdict(Verdict('error', why=error), error=error, logs=folder, wall_s=wall_s)
     return result_from_verdict(verdict, logs=folder, wall_s=wall_s)
+
+
+def _set_aside(folder):
+    if os.path.lexists(folder):
+        attempt = 1
+        while os.path.lexists('%s.attempt-%d' % (folder, attempt)):
+            attempt += 1
+        os.rename(folder, '%s.attempt-%d' % (folder, attempt))
 
 
 def _wait(spec, folder, keeper):
@@ -200,9 +235,11 @@ def _wait(spec, folder, keeper):
         if os.path.exists(verdict_file):
             with open(verdict_file) as f:
                 return Verdict.from_dict(json.load(f)), None
-        died = _died(folder)
-        if died is not None:
-            return None, 'node %s died (exit code %d): %s' % (died[0], died[1], _node_log(folder, died[0]))
+        failed = _failed(folder)
+        if failed is not None and isinstance(failed[1], int):
+            return None, 'node %s died (exit code %d): %s' % (failed[0], failed[1], _node_log(folder, failed[0]))
+        if failed is not None:
+            return None, 'roslaunch could not start node %s: %s' % failed
         if keeper.poll() is not None:
             if os.path.exists(os.path.join(folder, 'keeper_error')):
                 return None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))

@@ -7,9 +7,11 @@ It starts ``rosmaster`` on a port it has checked is its own (the master answers 
 port to FOLDER/port, runs ``roslaunch`` of LAUNCH_FILE on it (output in FOLDER/graph.log), and shuts the
 graph down when its standard input closes (the episode's runner is done, or has died: the pipe closes with
 its process), on SIGTERM or SIGINT, or when roslaunch ends. Shutting down: SIGINT to roslaunch (which gives
-each node SIGINT, then SIGTERM), a grace period, then SIGKILL to everything left in the keeper's own process
-group (the runner starts it as a session of its own, and roslaunch, the master and every node are in it).
-Only the standard library: it runs beside whatever Python a worker has.
+each node SIGINT, then SIGTERM, then SIGKILL), a grace period, then SIGKILL to everything left of the graph:
+the keeper's process group (roslaunch, the master) and every process that carries the graph's mark in its
+environment (``CLOSED_LOOP_GRAPH``, which each node inherits; roslaunch starts each node in a session of its
+own, so a process group does not hold them). Only the standard library: it runs beside whatever Python a
+worker has.
 """
 import os
 import signal
@@ -26,6 +28,34 @@ NODE_SIGINT_S, NODE_SIGTERM_S = 3.0, 2.0
 GRACE_S = NODE_SIGINT_S + NODE_SIGTERM_S + 3.0
 MASTER_WAIT_S = 15.0
 MASTER_TRIES = 5
+
+
+#: The environment variable that marks every process of a graph: its episode folder.
+MARK = 'CLOSED_LOOP_GRAPH'
+
+
+def marked_processes(prefix):
+    """Pids of the processes (this user's that can be read) whose ``CLOSED_LOOP_GRAPH`` starts with ``prefix``."""
+    found, mark = [], (MARK + '=' + prefix).encode()
+    for name in os.listdir('/proc'):
+        if not name.isdigit() or int(name) == os.getpid():
+            continue
+        try:
+            with open('/proc/%s/environ' % name, 'rb') as f:
+                if any(item.startswith(mark) for item in f.read().split(b'\0')):
+                    found.append(int(name))
+        except OSError:
+            continue            # gone, or not ours to read
+    return found
+
+
+def kill_marked(prefix):
+    """SIGKILL every process marked with ``prefix`` (see :func:`marked_processes`)."""
+    for pid in marked_processes(prefix):
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
 
 
 def free_port():
@@ -70,6 +100,7 @@ def main(argv=None):
             stop.set()
     threading.Thread(target=watch_stdin, daemon=True).start()
     env = dict(os.environ)
+    env.setdefault(MARK, os.path.abspath(folder) + os.sep)      # the runner sets it, for the keeper too
     env.pop('ROS_HOSTNAME', None)
     env['ROS_IP'] = '127.0.0.1'
     launch = None
@@ -95,7 +126,8 @@ def main(argv=None):
             except subprocess.TimeoutExpired:
                 pass
         sys.stdout.flush()
-        os.killpg(os.getpgid(0), signal.SIGKILL)      # everything left of the graph, and the keeper
+        kill_marked(env[MARK])                         # every node left, in whatever session
+        os.killpg(os.getpgid(0), signal.SIGKILL)      # the master, roslaunch, and the keeper
 
 
 if __name__ == '__main__':

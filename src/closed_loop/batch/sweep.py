@@ -9,7 +9,9 @@ on machines that have this package installed). Each finished episode is one row 
 ``OUTPUT/rows.csv`` at once (the spec, as JSON and one column per grid key, and the result), so an
 interrupted sweep keeps what it did, and ``--resume`` runs only what is missing. An episode that
 raises is a row with outcome ``error`` and its message; the sweep goes on. At the end: a summary table
-(also ``OUTPUT/summary.txt``) and ``OUTPUT/plot.png``.
+(also ``OUTPUT/summary.txt``) and ``OUTPUT/plot.png``. A graph episode (a controller that is a launch file
+or a node: ``closed_loop.batch.graph_episode``) keeps its files in ``OUTPUT/graphs/episode-INDEX``; when a
+local cluster closes, done or interrupted, the sweep waits for those graphs to be down.
 """
 import argparse
 import csv
@@ -21,7 +23,7 @@ import time
 
 import numpy
 
-from closed_loop.batch import sweep_file
+from closed_loop.batch import graph_keeper, sweep_file
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 
@@ -35,11 +37,11 @@ def row_key(spec):
     return json.dumps(spec.to_dict(), sort_keys=True)
 
 
-def run_row(spec_fields, logs_root=None):
+def run_row(spec_fields, logs=None):
     """One episode on a worker: the result columns (never raises; an episode that did is outcome 'error').
-    A graph episode's folder goes under ``logs_root``."""
+    A graph episode's files go into the folder ``logs``."""
     try:
-        r = run_episode(EpisodeSpec.from_dict(spec_fields), _CACHE, logs_root)
+        r = run_episode(EpisodeSpec.from_dict(spec_fields), _CACHE, logs)
         row = {'outcome': r.outcome, 'mode': r.mode, 'time_s': r.time_s, 'contacts': r.contacts,
                'min_clearance_m': r.min_clearance_m, 'final_x': r.final_pose[0], 'final_y': r.final_pose[1],
                'final_yaw': r.final_pose[2], 'goal_error_m': r.goal_error_m, 'path_m': r.path_m,
@@ -127,10 +129,11 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
             f.flush()
         if todo:
             client, cluster = _client(scheduler, workers)
+            logs_root = os.path.abspath(os.path.join(output, 'graphs'))
             try:
-                logs_root = os.path.abspath(os.path.join(output, 'graphs'))
-                futures = {client.submit(run_row, s.to_dict(), logs_root, key='episode-%d-%s' % (i, _digest(s)),
-                                         pure=False): (i, a, s) for i, a, s in todo}
+                futures = {client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i),
+                                         key='episode-%d-%s' % (i, _digest(s)), pure=False): (i, a, s)
+                           for i, a, s in todo}
                 for future in distributed.as_completed(futures):
                     i, assignment, spec = futures.pop(future)
                     result = future.result()
@@ -148,7 +151,18 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
                 client.close()
                 if cluster is not None:
                     cluster.close()
+                    _wait_graphs_down(logs_root)
     return read_rows(rows_path)
+
+
+def _wait_graphs_down(logs_root, timeout_s=graph_keeper.GRACE_S + 5.0):
+    """After a local cluster has closed (done, or Ctrl-C): the keepers of graph episodes it was running shut
+    their graphs down once their workers are gone; wait for that, then kill whatever is left of them."""
+    prefix = logs_root + os.sep
+    deadline = time.monotonic() + timeout_s
+    while graph_keeper.marked_processes(prefix) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    graph_keeper.kill_marked(prefix)
 
 
 def _digest(spec):

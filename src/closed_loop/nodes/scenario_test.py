@@ -50,10 +50,12 @@ class Scenario(unittest.TestCase):
             got.set()
         rospy.Subscriber(topic, String, on_verdict, queue_size=1)
         wait_s = float(rospy.get_param('~wait', DEFAULT_WAIT_S))
-        self.assertTrue(got.wait(wait_s), 'no verdict on %s within %g s of wall time' % (topic, wait_s))
+        if not got.wait(wait_s):
+            self.fail('no verdict on %s within %g s of wall time' % (topic, wait_s))
         verdict = box['verdict']
         found = problems(verdict, expect)
-        self.assertFalse(found, '%s; the robot: %s' % ('; '.join(found), verdict['why']))
+        if found:
+            self.fail('%s; the robot: %s' % ('; '.join(found), verdict['why']))
 
 
 def main():

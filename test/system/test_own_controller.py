@@ -1,0 +1,103 @@
+"""Controllers written elsewhere (test/fixtures/fixture_controllers: a rospy node that reads a 360-sample scan
+by index the way TurtleBot3's obstacle example does, and a roscpp node), in a package of their own built in a
+catkin workspace of its own, as docs/own_controller.md tells a user to: judged by scenario.launch in that
+package's rostests, and by a sweep of graph episodes; and the rows a sweep writes when a controller goes
+wrong."""
+import concurrent.futures
+import glob
+import math
+import os
+import subprocess
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from conftest import fixture_workspace, graph_leftovers, run_sweep
+
+ROSTEST_TIMEOUT_S = 300
+
+
+@pytest.fixture(scope='module')
+def fixture_env(tmp_path_factory):
+    return fixture_workspace(tmp_path_factory.mktemp('fixture'))
+
+
+def rostest(env, home, name):
+    """``rostest fixture_controllers NAME`` with its own ROS_HOME; (exit status, output, failure texts)."""
+    env = dict(env, ROS_HOME=str(home))
+    done = subprocess.run(['rostest', 'fixture_controllers', name], env=env, stdout=subprocess.PIPE,
+                          stderr=subprocess.STDOUT, universal_newlines=True, timeout=ROSTEST_TIMEOUT_S)
+    failures = [f.text or '' for path in glob.glob(str(home / 'test_results' / '**' / 'rosunit-*.xml'), recursive=True)
+                for f in ET.parse(path).getroot().iter('failure')]
+    return done.returncode, done.stdout, failures
+
+
+def test_a_package_of_ones_own_passes_its_rostests_and_a_failing_one_says_what_happened(fixture_env, tmp_path):
+    package = os.path.join(fixture_env['ROS_PACKAGE_PATH'].split(':')[0], 'fixture_controllers')
+    with open(os.path.join(package, 'test', 'tb3_obstacle.test')) as f:
+        stricter = f.read().replace('<param name="expect" value="stopped"/>', '<param name="expect" value="reached"/>')
+    assert 'value="reached"' in stricter
+    with open(os.path.join(package, 'test', 'tb3_expects_too_much.test'), 'w') as f:
+        f.write(stricter)
+    names = ('tb3_obstacle.test', 'goal_seeker.test', 'tb3_expects_too_much.test')
+    with concurrent.futures.ThreadPoolExecutor(len(names)) as pool:
+        results = dict(zip(names, pool.map(lambda n: rostest(fixture_env, tmp_path / n, n), names)))
+    for name in names[:2]:
+        code, out, failures = results[name]
+        assert code == 0 and not failures, '%s: %s\n%s' % (name, failures, out[-3000:])
+    code, out, failures = results['tb3_expects_too_much.test']
+    assert code != 0 and len(failures) == 1, out[-3000:]
+    # Its first line (rosunit adds the traceback below it): what was expected, and what the robot did, where,
+    # how close it came, how many contacts.
+    line = failures[0].strip().splitlines()[0]
+    assert line.startswith('outcome stopped, expected reached; the robot: stopped at (2.'), line
+    assert 'least clearance 0.' in line and '0 contacts' in line, line
+
+
+def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fixture_env, tmp_path):
+    sweep = os.path.join(fixture_env['ROS_PACKAGE_PATH'].split(':')[0], 'fixture_controllers', 'sweeps', 'both.yaml')
+    done, rows = run_sweep(fixture_env, sweep, tmp_path / 'out', '--workers', '2')
+    assert done.returncode == 0, done.stdout[-3000:]
+    assert sorted(rows) == [0, 1, 2, 3]
+    by_case = {(r['controller'].split('/')[-1].split('.')[0], r['goal']): r for r in rows.values()}
+    for goal in ('[2.0, 1.0]', '[5.0, 0.0]'):
+        tb3 = by_case[('tb3_obstacle', goal)]
+        assert tb3['outcome'] == 'stopped' and tb3['contacts'] == '0', tb3
+        assert 0.1 < float(tb3['min_clearance_m']) < 0.4 and 2.5 < float(tb3['final_x']) < 2.9, tb3
+    reached = by_case[('goal_seeker', '[2.0, 1.0]')]
+    assert reached['outcome'] == 'reached' and float(reached['goal_error_m']) < 0.4, reached
+    behind = by_case[('goal_seeker', '[5.0, 0.0]')]
+    assert behind['outcome'] == 'timed_out' and behind['contacts'] == '0' and float(behind['final_x']) < 2.9, behind
+    for row in rows.values():
+        assert not row['error'] and row['why'].startswith(row['outcome']), row
+        assert os.path.isfile(os.path.join(row['logs'], 'verdict.json')), row['logs']
+        assert os.path.isfile(os.path.join(row['logs'], 'graph.log')), row['logs']
+        assert math.isfinite(float(row['wall_s']))
+    assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
+
+
+def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_path):
+    sweep = os.path.join(fixture_env['ROS_PACKAGE_PATH'].split(':')[0], 'fixture_controllers', 'sweeps', 'errors.yaml')
+    done, rows = run_sweep(fixture_env, sweep, tmp_path / 'out', '--workers', '2')
+    assert done.returncode == 1 and 'episodes: 5, errors: 3' in done.stdout, done.stdout[-3000:]
+    by_case = {r['controller']: r for r in rows.values()}
+    missing = by_case['{"launch": "fixture_controllers/launch/nope.launch"}']
+    assert missing['outcome'] == 'error', missing
+    assert missing['error'].startswith('fixture_controllers/launch/nope.launch: the launch ended before a verdict'), missing
+    assert "No such file or directory: '" in missing['error'] and "/nope.launch'" in missing['error'], missing
+    unstartable = by_case['{"launch": "fixture_controllers/launch/no_such_node.launch"}']
+    assert unstartable['outcome'] == 'error', unstartable
+    assert 'could not start node fixture_controllers/no_such_node' in unstartable['error'], unstartable
+    crash = by_case['{"launch": "fixture_controllers/launch/misbehaving.launch", "args": {"how": "crash"}}']
+    assert crash['outcome'] == 'error', crash
+    assert 'node misbehaving died (exit code 3)' in crash['error'] and 'crashing on purpose' in crash['error'], crash
+    silent = by_case['{"launch": "fixture_controllers/launch/misbehaving.launch", "args": {"how": "silent"}}']
+    assert silent['outcome'] == 'stopped' and abs(float(silent['final_x'])) < 0.01, silent
+    assert silent['why'].endswith('no command ever reached the base'), silent
+    stubborn = by_case['{"launch": "fixture_controllers/launch/misbehaving.launch", "args": {"how": "stubborn"}}']
+    assert stubborn['outcome'] == 'stopped' and not stubborn['error'], stubborn
+    # It ignored SIGINT and SIGTERM at the end, and was stopped after roslaunch's grace (3 s, then 2 s).
+    with open(os.path.join(stubborn['logs'], 'graph.log')) as f:
+        text = f.read()
+    assert 'escalating to SIGTERM' in text and 'escalating to SIGKILL' in text, text[-2000:]
+    assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
