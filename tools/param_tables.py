@@ -21,6 +21,7 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 from closed_loop import commands, recording  # noqa: E402
 from closed_loop.control import guard, markers, scan, vision  # noqa: E402
 from closed_loop.controllers import controller_classes  # noqa: E402
+from closed_loop.batch import judge  # noqa: E402
 from closed_loop.sim import scheduler, simulation  # noqa: E402
 from closed_loop.sim.sensors import all_sensor_classes  # noqa: E402
 
@@ -38,6 +39,7 @@ def node_settings():
         'cmd_vel_marker': (markers.MarkerSettings,),
         'vision_node': (vision.VisionSettings,),
         'record_bag': (recording.RecordSettings,),
+        'scenario_judge': (judge.JudgeSettings, judge.StartSettings),
     }
     for name, cls in controller_classes().items():
         nodes[name] = (cls.settings_class,) + tuple(cls.extra_settings_classes)

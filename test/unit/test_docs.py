@@ -71,3 +71,22 @@ def test_the_readme_is_a_short_start_that_leads_to_the_docs():
     assert text.index('make demo') < text.index('## A five-minute tour')
     for page in param_tables.docs():
         assert 'docs/' + os.path.basename(page) in text, 'README does not lead to %s' % page
+
+
+def test_a_file_the_docs_show_whole_is_the_file_the_tests_run():
+    """``<!-- own-test: PATH -->`` before a code block: the block is PATH as it stands (a copied test file that
+    the tests run, so the page cannot drift from it)."""
+    marker = re.compile(r'^<!-- own-test: (\S+) -->$')
+    shown = 0
+    for page in pages():
+        lines = open(page).read().split('\n')
+        for i, line in enumerate(lines):
+            match = marker.match(line)
+            if match:
+                assert lines[i + 1].startswith('```'), '%s:%d: no code block after the marker' % (page, i + 1)
+                end = next(j for j in range(i + 2, len(lines)) if lines[j].startswith('```'))
+                with open(os.path.join(ROOT, match.group(1))) as f:
+                    assert '\n'.join(lines[i + 2:end]) + '\n' == f.read(), '%s:%d: differs from %s' % (
+                        page, i + 1, match.group(1))
+                shown += 1
+    assert shown >= 1

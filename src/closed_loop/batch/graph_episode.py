@@ -30,7 +30,7 @@ from closed_loop.sim import clutter
 
 #: Simulated s per wall s in a graph episode, unless the spec says: the fastest at which a graph episode
 #: still agrees with real time (docs/episodes.md, "Graph episodes": measured).
-REAL_TIME_FACTOR = 2.0
+REAL_TIME_FACTOR = 4.0
 #: Wall time (s) a graph gets to start, and its slack beyond the scenario's simulated time.
 STARTUP_S, SLACK_S = 40.0, 20.0
 #: After the verdict or an error, how long the keeper gets to shut the graph down (s).

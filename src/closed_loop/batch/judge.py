@@ -34,9 +34,9 @@ class JudgeSettings:
                                   minimum=0.0, exclusive_minimum=True)
     time_limit: float = param(60.0, 's', 'the scenario ends at this simulated time', minimum=0.0,
                               exclusive_minimum=True)
-    rest_speed: float = param(1e-3, 'm/s', 'at rest: ground-truth speed under this (and the yaw rate under '
+    rest_speed: float = param(0.005, 'm/s', 'at rest: ground-truth speed under this (and the yaw rate under '
                               'rest_yaw_rate, under a zero command)', minimum=0.0, exclusive_minimum=True)
-    rest_yaw_rate: float = param(1e-3, 'rad/s', 'at rest: ground-truth yaw rate under this', minimum=0.0,
+    rest_yaw_rate: float = param(0.01, 'rad/s', 'at rest: ground-truth yaw rate under this', minimum=0.0,
                                  exclusive_minimum=True)
     rest_hold: float = param(1.0, 's', 'at rest this long ends the scenario (see end_at_rest)', minimum=0.0)
     end_at_rest: bool = param(True, '', 'true: at rest for rest_hold anywhere ends it (stopped); false: only '
@@ -44,6 +44,19 @@ class JudgeSettings:
     end_on_contact: bool = param(False, '', 'end at the first contact (outcome collided)')
     period: float = param(0.1, 's', 'ground truth is judged at this period of simulated time', minimum=0.01,
                           maximum=1.0)
+
+
+@dataclasses.dataclass
+class StartSettings:
+    """How a scenario in a ROS graph starts (the ``scenario_judge`` node's ``~parameters``): the simulator
+    waits, paused at t = 0, until the controller is up, so that a controller that takes a while to start
+    (a C++ node loading, a launch file of several nodes) meets the same world as an in-process episode's."""
+    unpause: str = param('', '', "the simulator's unpause service (scenario.launch: /sim/unpause_physics, with the "
+                         "simulator started paused), called once a node publishes cmd_vel; empty: none")
+    ready_timeout: float = param(30.0, 's', 'wall time to wait for a node that publishes cmd_vel before starting '
+                                 'the simulation anyway (the verdict then says no command came)', minimum=0.0)
+    settle: float = param(0.2, 's', "wall time between the controller's cmd_vel appearing and the start, for "
+                          'its subscriptions to connect', minimum=0.0)
 
 
 @dataclasses.dataclass

@@ -4,13 +4,16 @@ import math
 import os
 import tempfile
 import threading
+import time
 
+import rosgraph
 import rospy
 from geometry_msgs.msg import Twist
+from std_srvs.srv import Empty
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Float32, String, UInt32
 
-from closed_loop.batch.judge import Judge, JudgeSettings
+from closed_loop.batch.judge import Judge, JudgeSettings, StartSettings
 from closed_loop.geometry import quaternion_yaw
 from closed_loop.nodes.common import init_node, load_settings, stamp_to_sec
 from closed_loop.sim.simulation import SimSettings
@@ -30,9 +33,10 @@ class ScenarioJudge:
     Publications: ``~verdict`` (std_msgs/String, latched): the verdict as JSON (outcome, mode, time_s,
     contacts, min_clearance_m, final_pose, goal_error_m, path_m, peak_decel_mps2, commands, why), once, when
     the scenario is over; the verdict's line is also logged.
-    Parameters: :class:`closed_loop.batch.judge.JudgeSettings`; ``~goal_x``, ``~goal_y`` (m, in the world
-    frame: both or neither); ``~verdict_file`` (a path: the verdict's JSON is also written there, whole or
-    not at all).
+    Parameters: :class:`closed_loop.batch.judge.JudgeSettings` and :class:`closed_loop.batch.judge.StartSettings`
+    (with ``~unpause``, it starts the paused simulator once a node publishes ``cmd_vel``); ``~goal_x``,
+    ``~goal_y`` (m, in the world frame: both or neither); ``~verdict_file`` (a path: the verdict's JSON is
+    also written there, whole or not at all).
     """
 
     def __init__(self):
@@ -51,9 +55,38 @@ class ScenarioJudge:
         rospy.Subscriber('cmd_vel', Twist, self._on_command, queue_size=10)
         rospy.Subscriber('mode', String, self._on_mode, queue_size=10)
         rospy.Subscriber('base_pose_ground_truth', Odometry, self._on_truth, queue_size=50)
+        self.start = load_settings(StartSettings)
+        if self.start.unpause:
+            threading.Thread(target=self._start_when_ready, daemon=True).start()
         rospy.loginfo('judging: %s; time limit %.1f s', 'goal (%.2f, %.2f), success within %.2f m'
                       % (self.goal + (self.settings.success_radius,)) if self.goal else 'no goal',
                       self.settings.time_limit)
+
+    def _start_when_ready(self):
+        """Unpause the simulator once some node publishes cmd_vel (and its subscriptions have had ``settle``
+        to connect), or after ``ready_timeout`` anyway."""
+        topic, master = rospy.resolve_name('cmd_vel'), rosgraph.Master(rospy.get_name())
+        deadline = time.monotonic() + self.start.ready_timeout
+        publishers = []
+        while not rospy.is_shutdown() and time.monotonic() < deadline:
+            try:
+                publishers = dict(master.getSystemState()[0]).get(topic, [])
+            except (rosgraph.MasterException, OSError):
+                publishers = []
+            if publishers:
+                break
+            time.sleep(0.05)
+        if publishers:
+            time.sleep(self.start.settle)
+            rospy.loginfo('the controller is up (%s publishes %s): starting the simulation', publishers[0], topic)
+        else:
+            rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', topic,
+                          self.start.ready_timeout)
+        try:
+            rospy.wait_for_service(self.start.unpause, timeout=self.start.ready_timeout + 1.0)
+            rospy.ServiceProxy(self.start.unpause, Empty)()
+        except (rospy.ROSException, rospy.ServiceException) as error:
+            rospy.logerr('cannot start the simulation (%s): %s', self.start.unpause, error)
 
     def _goal(self):
         has_x, has_y = rospy.has_param('~goal_x'), rospy.has_param('~goal_y')

@@ -227,7 +227,9 @@ class SimNode:
                       '; '.join(port.describe() for port in self.ports), self.scheduling.real_time_factor)
         self._lock = threading.Lock()
         self._requests = []
-        self._paused = False
+        self._paused = self.scheduling.paused
+        if self._paused:
+            rospy.loginfo('sim_node: paused at t = 0 until ~unpause_physics')
         self._stopped = threading.Event()
         self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))

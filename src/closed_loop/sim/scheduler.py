@@ -14,6 +14,8 @@ class SchedulingSettings:
                                      'often per wall second (every step at real time; throttled when '
                                      'faster), and always before a scan or camera frame',
                                      minimum=1.0)
+    paused: bool = param(False, '', 'start with physics paused at t = 0 (/clock at 0, no sensor data) until '
+                         '~unpause_physics is called (scenario.launch: its judge does, once the controller is up)')
 
 
 class Schedule:

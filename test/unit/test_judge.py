@@ -1,0 +1,115 @@
+"""The judge's rules (closed_loop.batch.judge), the rostest checker's comparison (scenario_test), and how a
+graph episode's controller and launch file are made (closed_loop.batch.graph_episode)."""
+import math
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from closed_loop.batch import graph_episode
+from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare
+from closed_loop.batch.judge import Judge, JudgeSettings, Verdict
+from closed_loop.controllers import controller_classes
+from closed_loop.nodes.scenario_test import problems
+
+
+def drive(judge, track, dt=0.1):
+    """Feed ``track``: a list of (x, speed, command, mode) per period; returns the verdict at the end."""
+    t = 0.0
+    for x, speed, command, mode in track:
+        if judge.due(t) and judge.observe(t, x, 0.0, 0.0, speed, 0.0, command, mode):
+            break
+        t += dt
+    return judge.verdict(t)
+
+
+def test_a_robot_at_rest_for_the_hold_is_stopped_from_when_it_came_to_rest():
+    judge = Judge(JudgeSettings(rest_hold=1.0))
+    moving = [(0.1 * i, 0.5, (0.5, 0.0), None) for i in range(10)]
+    resting = [(1.0, 0.0, (0.0, 0.0), None)] * 20
+    verdict = drive(judge, moving + resting)
+    assert verdict.outcome == 'stopped' and verdict.time_s == pytest.approx(1.0)
+    assert verdict.path_m == pytest.approx(1.0) and verdict.commands == 0
+
+
+def test_a_zero_command_is_needed_for_rest_and_no_command_counts_as_zero():
+    creeping = drive(Judge(JudgeSettings(time_limit=3.0)), [(0.0, 0.0, (0.1, 0.0), None)] * 40)
+    assert creeping.outcome == 'timed_out'
+    silent = drive(Judge(JudgeSettings()), [(0.0, 0.0, None, None)] * 40)
+    assert silent.outcome == 'stopped' and silent.why.endswith('no command ever reached the base')
+
+
+def test_at_rest_within_the_radius_is_reached_and_a_navigator_waiting_elsewhere_is_not_stopped():
+    near = drive(Judge(JudgeSettings(), goal=(1.2, 0.0)), [(1.0, 0.0, (0.0, 0.0), None)] * 20)
+    assert near.outcome == 'reached' and near.goal_error_m == pytest.approx(0.2)
+    waiting = drive(Judge(JudgeSettings(end_at_rest=False, time_limit=5.0), goal=(5.0, 0.0)),
+                    [(1.0, 0.0, (0.0, 0.0), None)] * 60)
+    assert waiting.outcome == 'timed_out' and waiting.time_s == pytest.approx(5.0)
+
+
+def test_the_controllers_word_counts_only_where_ground_truth_agrees():
+    said_reached_far = drive(Judge(JudgeSettings(), goal=(5.0, 0.0)), [(1.0, 0.0, (0.0, 0.0), 'REACHED')] * 5)
+    assert said_reached_far.outcome == 'failed'
+    gave_up = drive(Judge(JudgeSettings()), [(1.0, 0.0, (0.0, 0.0), 'FAILED')] * 5)
+    assert gave_up.outcome == 'failed' and gave_up.mode == 'FAILED'
+
+
+def test_a_contact_wins_over_everything_and_can_end_the_scenario():
+    judge = Judge(JudgeSettings(end_on_contact=True), goal=(1.0, 0.0))
+    judge.on_contact(0.5)
+    assert judge.ended
+    verdict = judge.verdict(0.5, (1.0, 0.0, 0.0))
+    assert verdict.outcome == 'collided' and verdict.contacts == 1 and verdict.time_s == 0.5
+
+
+def test_clearance_and_peak_deceleration_are_kept_and_the_verdict_survives_json():
+    judge = Judge(JudgeSettings())
+    judge.on_clearance(0.8)
+    judge.on_clearance(0.3)
+    judge.on_clearance(0.5)
+    verdict = drive(judge, [(0.0, 1.0, (1.0, 0.0), None), (0.1, 0.5, (0.0, 0.0), None)]
+                    + [(0.15, 0.0, (0.0, 0.0), None)] * 20)
+    assert verdict.min_clearance_m == 0.3 and verdict.peak_decel_mps2 == pytest.approx(5.0)
+    assert Verdict.from_dict(verdict.to_dict()) == verdict
+    assert Verdict.from_dict(Verdict('timed_out').to_dict()).min_clearance_m == math.inf
+
+
+def test_scenario_test_names_each_expectation_the_verdict_breaks():
+    verdict = {'outcome': 'stopped', 'contacts': 2, 'min_clearance_m': 0.02, 'time_s': 40.0}
+    expect = {'outcomes': ['reached'], 'max_contacts': 0, 'min_clearance': 0.05, 'within': 30.0}
+    assert problems(verdict, expect) == ['outcome stopped, expected reached', '2 contacts, at most 0 allowed',
+                                         'least clearance 0.020 m, at least 0.050 m required',
+                                         'after 40.0 s, within 30.0 s required']
+    fine = dict(verdict, outcome='reached', contacts=0, min_clearance_m=None, time_s=10.0)
+    assert problems(fine, dict(expect, outcomes=['stopped', 'reached'])) == []
+
+
+@pytest.mark.parametrize('controller, message', [
+    ({'launch': 'pkg/x.launch', 'node': 'stop_on_obstacle'}, 'one of them'),
+    ({'launch': 'x.launch'}, 'a package name, then a path'),
+    ({'launch': 'pkg/../x.launch'}, 'a package name, then a path'),
+    ({'launch': 'pkg/x.py'}, 'expected PKG/path/file.launch'),
+    ({'launch': '/tmp/$(eval 1)/x.launch'}, 'substitution'),
+    ({'launch': 'pkg/x.launch', 'args': {'speed': '$(env HOME)'}}, 'no $(...) substitution'),
+    ({'launch': 'pkg/x.launch', 'args': {'bad name': 1}}, 'not an arg name'),
+    ({'launch': 'pkg/x.launch', 'ergs': {}}, 'controller.ergs'),
+    ({'node': 'no_such_controller'}, 'controller.node: expected one of'),
+])
+def test_a_graph_controller_that_cannot_be_run_is_refused_naming_the_field(controller, message):
+    with pytest.raises(EpisodeError, match=r'controller') as caught:
+        graph_episode.parse_controller(controller, controller_classes())
+    assert message in str(caught.value)
+
+
+def test_the_episode_launch_file_passes_the_args_and_sets_no_substitution_from_data(tmp_path):
+    spec = EpisodeSpec(world='obstacle_left', controller={'launch': 'my_pkg/launch/c.launch', 'args': {'speed': 0.4}},
+                       goal=(6.0, 0.0), time_limit_s=30)
+    text = graph_episode.launch_text(spec, prepare(spec), str(tmp_path))
+    root = ET.fromstring(text)
+    args = {a.get('name'): a.get('value') for a in root.findall('arg')}
+    assert args['goal_x'] == '6.0' and args['time_limit'] == '30' and args['world'] == 'obstacle_left'
+    assert args['real_time_factor'] == str(graph_episode.REAL_TIME_FACTOR)
+    include = [i for i in root.findall('include') if 'my_pkg' in i.get('file')][0]
+    assert include.get('file') == '$(find my_pkg)/launch/c.launch' and include.get('pass_all_args') == 'true'
+    assert [(a.get('name'), a.get('value')) for a in include.findall('arg')] == [('speed', '0.4')]
+    with pytest.raises(EpisodeError, match='verdict_file'):
+        graph_episode.launch_text(spec, prepare(spec), str(tmp_path / '$(env HOME)'))
