@@ -28,13 +28,13 @@ def test_stop_on_obstacle_stops_within_3_cm_of_its_core_in_process(tmp_path):
 
 def test_avoid_obstacles_comes_to_the_same_outcome_as_its_core_in_five_worlds(tmp_path):
     sweep = tmp_path / 'avoid.yaml'
-    sweep.write_text('name: avoid\nbase: {controller: {node: avoid_obstacles}, time_limit_s: 60}\n'
+    sweep.write_text('name: avoid\nbase: {controller: {node: avoid_obstacles}, time_limit_s: 40}\n'
                      'grid:\n  world: [%s]\n' % ', '.join(AVOID_WORLDS))
     done, rows = run_sweep(os.environ, sweep, tmp_path / 'out', '--workers', '2')
     assert done.returncode == 0, done.stdout[-3000:]
     assert sorted(r['world'] for r in rows.values()) == sorted(AVOID_WORLDS)
     for row in rows.values():
-        core = run_episode(EpisodeSpec(world=row['world'], controller='avoid_obstacles', time_limit_s=60))
+        core = run_episode(EpisodeSpec(world=row['world'], controller='avoid_obstacles', time_limit_s=40))
         assert row['outcome'] == core.outcome, (row['world'], row['why'], core.why)
         assert row['contacts'] == '0', row
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}

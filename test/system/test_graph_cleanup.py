@@ -58,7 +58,7 @@ def test_twenty_graph_episodes_half_of_them_timed_out_leave_no_process_and_no_po
 
 
 def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
-    sweep = write_sweep(tmp_path, 'killed', '[30]', '[0, 1, 2, 3]', 1)
+    sweep = write_sweep(tmp_path, 'killed', '[30]', '[0, 1, 2, 3]', 2)
     out = tmp_path / 'out'
     process = subprocess.Popen([sys.executable, '-m', 'closed_loop.sweep', str(sweep), '--output', str(out),
                                 '--workers', '2'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,

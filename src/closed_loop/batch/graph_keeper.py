@@ -110,7 +110,7 @@ def main(argv=None):
         with open(os.path.join(folder, 'port'), 'w') as f:
             f.write('%d\n' % port)
         with open(os.path.join(folder, 'graph.log'), 'ab') as log:
-            launch = subprocess.Popen(['roslaunch', '--sigint-timeout', str(NODE_SIGINT_S), '--sigterm-timeout',
+            launch = subprocess.Popen(['roslaunch', '--skip-log-check', '--sigint-timeout', str(NODE_SIGINT_S), '--sigterm-timeout',
                                        str(NODE_SIGTERM_S), '-p', str(port), launch_file],
                                       stdout=log, stderr=subprocess.STDOUT, env=env)
         while not stop.is_set() and launch.poll() is None:

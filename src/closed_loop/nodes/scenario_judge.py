@@ -115,6 +115,8 @@ class ScenarioJudge:
     def _on_command(self, msg):
         with self.lock:
             self.command = (msg.linear.x, msg.angular.z, rospy.Time.now().to_sec())
+            if not self.judge.commands:
+                rospy.loginfo('first command: linear.x %.3f m/s, angular.z %.3f rad/s', msg.linear.x, msg.angular.z)
             self.judge.on_command()
 
     def _on_mode(self, msg):
