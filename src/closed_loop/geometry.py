@@ -1,8 +1,18 @@
-"""Planar rotations as quaternions, in one place (REP 103: yaw counter-clockwise about +z, radians).
+"""Planar poses and rotations as quaternions, in one place (REP 103: yaw counter-clockwise about +z, radians).
 
 Quaternions are (x, y, z, w) tuples, the order of geometry_msgs/Quaternion and of pybullet.
 """
 import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Pose2D:
+    """A pose on the ground plane in some frame (the world's, or base_footprint's for a sensor on the robot):
+    x, y in m, yaw in rad (counter-clockwise from +x)."""
+    x: float
+    y: float
+    yaw: float
 
 
 def yaw_quaternion(yaw_rad):

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from closed_loop.geometry import Pose2D
+
 #: The default robot's names (urdf/closed_loop.urdf). A robot profile (config/robots/<name>.yaml) names its own
 #: frames and joints through the simulator's parameters; these are only the defaults of those parameters.
 LEFT_WHEEL_JOINT = 'wheel_left_joint'
@@ -49,7 +51,7 @@ class RobotModel:
     wheel_radius_m: float
     wheel_separation_m: float   # distance between the left and right wheel contact lines, along y
     footprint: 'Footprint'      # the rectangle around the collision shapes, in the base frame
-    scan_pose: 'Pose2DInBase'   # the LIDAR frame in the base frame
+    scan_pose: Pose2D     # the LIDAR frame in the base frame
 
     @property
     def scan_to_front_m(self):
@@ -138,14 +140,6 @@ class Footprint:
     @property
     def width_m(self):
         return self.y_max - self.y_min
-
-
-@dataclass(frozen=True)
-class Pose2DInBase:
-    """A frame's planar pose in base_footprint: x, y (m) and yaw (rad)."""
-    x: float
-    y: float
-    yaw: float
 
 
 def _origin_matrix(element):
@@ -238,4 +232,4 @@ def frame_pose_2d(urdf_text, frame, source='robot_description', base_frame=BASE_
     if frame not in poses:
         raise RobotModelError('%s: link %r is missing or not below %r' % (source, frame, base_frame))
     m = poses[frame]
-    return Pose2DInBase(float(m[0, 3]), float(m[1, 3]), math.atan2(m[1, 0], m[0, 0]))
+    return Pose2D(float(m[0, 3]), float(m[1, 3]), math.atan2(m[1, 0], m[0, 0]))

@@ -30,6 +30,13 @@ def wait_for(predicate, timeout_s, what):
     raise AssertionError('%s: not within %g s' % (what, timeout_s))
 
 
+def start_sweep(sweep, out):
+    """The sweep on 2 workers, as a session of its own (so that a test can signal it as a terminal would)."""
+    return subprocess.Popen([sys.executable, '-m', 'closed_loop.sweep', str(sweep), '--output', str(out),
+                             '--workers', '2'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            universal_newlines=True, start_new_session=True)
+
+
 def running_keepers(root):
     """(keeper pid, its parent: the worker) of the graphs under ``root`` that are up (their master's port known)."""
     from closed_loop.batch import graph_keeper
@@ -60,9 +67,7 @@ def test_twenty_graph_episodes_half_of_them_timed_out_leave_no_process_and_no_po
 def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
     sweep = write_sweep(tmp_path, 'killed', '[30]', '[0, 1, 2, 3]', 2)
     out = tmp_path / 'out'
-    process = subprocess.Popen([sys.executable, '-m', 'closed_loop.sweep', str(sweep), '--output', str(out),
-                                '--workers', '2'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                               universal_newlines=True, start_new_session=True)
+    process = start_sweep(sweep, out)
     try:
         keeper, worker = wait_for(lambda: running_keepers(out), 120, 'a graph episode up')[0]
         os.kill(worker, signal.SIGKILL)
@@ -80,9 +85,7 @@ def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
 def test_ctrl_c_stops_the_sweep_and_its_graphs(tmp_path):
     sweep = write_sweep(tmp_path, 'interrupted', '[60]', '[0, 1, 2, 3]', 1)
     out = tmp_path / 'out'
-    process = subprocess.Popen([sys.executable, '-m', 'closed_loop.sweep', str(sweep), '--output', str(out),
-                                '--workers', '2'], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                               universal_newlines=True, start_new_session=True)
+    process = start_sweep(sweep, out)
     try:
         wait_for(lambda: len(running_keepers(out)) == 2, 120, 'two graph episodes up')
         os.killpg(process.pid, signal.SIGINT)          # what Ctrl-C in its terminal does

@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from closed_loop.sim.drive import (STOP, VelocityCommand, CommandError, CommandWatchdog, Odometry2D,
+from closed_loop.sim.drive import (STOP, VelocityCommand, CommandError, CommandWatchdog, DeadReckoning,
                                body_twist, limit_twist, ramp, validate_twist, wheel_speeds)
 
 # The robot's wheel geometry (urdf/closed_loop.urdf); any positive values would do for the algebra.
@@ -192,7 +192,7 @@ def test_body_twist_from_unequal_wheels():
         pytest.approx((0.5, 0.05 * 4.0 / 0.28))
 
 
-# --- Odometry2D -------------------------------------------------------------------------------
+# --- DeadReckoning -------------------------------------------------------------------------------
 
 def integrate(odometry, twist, duration_s, steps):
     for _ in range(steps):
@@ -200,21 +200,21 @@ def integrate(odometry, twist, duration_s, steps):
 
 
 def test_odometry_straight_line():
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     integrate(odometry, VelocityCommand(0.5, 0.0), 2.0, 20)
     assert (odometry.x, odometry.y, odometry.yaw) == pytest.approx((1.0, 0.0, 0.0), abs=1e-12)
     assert odometry.twist == VelocityCommand(0.5, 0.0)
 
 
 def test_odometry_straight_line_follows_the_heading():
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     integrate(odometry, VelocityCommand(0.0, 1.0), math.pi / 2, 10)
     integrate(odometry, VelocityCommand(0.5, 0.0), 2.0, 20)
     assert (odometry.x, odometry.y) == pytest.approx((0.0, 1.0), abs=1e-9)
 
 
 def test_odometry_turn_in_place():
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     integrate(odometry, VelocityCommand(0.0, 1.0), math.pi / 2, 7)
     assert (odometry.x, odometry.y) == pytest.approx((0.0, 0.0), abs=1e-12)
     assert odometry.yaw == pytest.approx(math.pi / 2)
@@ -223,13 +223,13 @@ def test_odometry_turn_in_place():
 
 
 def test_odometry_yaw_stays_within_plus_minus_pi():
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     integrate(odometry, VelocityCommand(0.0, 1.0), 1.5 * math.pi, 30)
     assert odometry.yaw == pytest.approx(-0.5 * math.pi)
 
 
 def test_odometry_full_circle_returns_to_the_start():
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     # Radius 0.5 m counter-clockwise: the centre is at (0, 0.5), half-way is (0, 1).
     twist = VelocityCommand(0.5, 1.0)
     integrate(odometry, twist, math.pi, 50)
@@ -241,13 +241,13 @@ def test_odometry_full_circle_returns_to_the_start():
 
 def test_odometry_quarter_arc_uses_the_exact_arc():
     # One large step must land on the circle, not on the tangent (which would give x = 0.5 pi / 2).
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     odometry.integrate(VelocityCommand(0.5, 1.0), math.pi / 2)
     assert (odometry.x, odometry.y, odometry.yaw) == pytest.approx((0.5, 0.5, math.pi / 2))
 
 
 def test_odometry_reset():
-    odometry = Odometry2D()
+    odometry = DeadReckoning()
     integrate(odometry, VelocityCommand(0.5, 1.0), 1.0, 5)
     odometry.reset()
     assert (odometry.x, odometry.y, odometry.yaw) == (0.0, 0.0, 0.0)

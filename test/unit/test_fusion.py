@@ -7,7 +7,7 @@ import pytest
 from closed_loop.control.fusion import Belief, CameraModel, FusionSettings, associate, belief, fresh_detection
 from closed_loop.sim.profiles import load_profile
 from closed_loop.sim.rig import Rig
-from closed_loop.robot_model import Pose2DInBase
+from closed_loop.geometry import Pose2D
 from closed_loop.control.scan import Scan
 from closed_loop.sim.sensors.camera import Camera, camera_intrinsics
 from closed_loop.sim.sensors.lidar import Lidar
@@ -17,7 +17,7 @@ from closed_loop.sim.world import parse_world
 
 F = FusionSettings()
 INTRINSICS = camera_intrinsics(320, 240, 1.085)
-CAMERA = CameraModel(INTRINSICS.fx, INTRINSICS.cx, INTRINSICS.width, Pose2DInBase(0.16, 0.0, 0.0))
+CAMERA = CameraModel(INTRINSICS.fx, INTRINSICS.cx, INTRINSICS.width, Pose2D(0.16, 0.0, 0.0))
 
 
 def track(id_, x, y, moving=False, born_s=0.0, size=0.3):

@@ -74,45 +74,45 @@ def test_clearance_of_the_rectangle():
 
 def test_open_space_passes_the_command_whole():
     result = run([], 1.0, 0.0, 1.0, 0.5)
-    assert result.verdict == guard.Verdict.PASS and (result.linear_x, result.angular_z) == (1.0, 0.5)
+    assert result.verdict == guard.GuardVerdict.PASS and (result.linear_x, result.angular_z) == (1.0, 0.5)
 
 
 def test_a_far_wall_passes_a_near_one_slows_a_close_one_vetoes():
     far = run(wall_ahead(2.0), 1.0, 0.0, 1.0, 0.0)
     near = run(wall_ahead(0.7), 1.0, 0.0, 1.0, 0.0)
     close = run(wall_ahead(0.24), 0.0, 0.0, 1.0, 0.0)
-    assert far.verdict == guard.Verdict.PASS
-    assert near.verdict == guard.Verdict.SLOWED and 0 < near.linear_x < 1.0
-    assert close.verdict == guard.Verdict.VETOED and (close.linear_x, close.angular_z) == (0.0, 0.0)
+    assert far.verdict == guard.GuardVerdict.PASS
+    assert near.verdict == guard.GuardVerdict.SLOWED and 0 < near.linear_x < 1.0
+    assert close.verdict == guard.GuardVerdict.VETOED and (close.linear_x, close.angular_z) == (0.0, 0.0)
     for result in (far, near):
         assert result.clearance_m >= SETTINGS.safety_margin
 
 
 def test_a_slowed_command_keeps_its_curvature():
     result = run(wall_ahead(0.7), 1.0, 0.0, 1.0, 0.4)
-    assert result.verdict == guard.Verdict.SLOWED
+    assert result.verdict == guard.GuardVerdict.SLOWED
     assert result.angular_z / result.linear_x == pytest.approx(0.4)
 
 
 def test_an_obstacle_beside_the_path_does_not_stop_it():
     result = run([(x, 0.5) for x in numpy.arange(0.0, 2.0, 0.02)], 0.5, 0.0, 0.5, 0.0)
-    assert result.verdict == guard.Verdict.PASS
+    assert result.verdict == guard.GuardVerdict.PASS
 
 
 def test_backing_away_from_a_wall_already_too_close_is_allowed():
     points = wall_ahead(0.2)
-    assert run(points, 0.0, 0.0, -0.3, 0.0).verdict == guard.Verdict.PASS
-    assert run(points, 0.0, 0.0, 0.3, 0.0).verdict == guard.Verdict.VETOED
+    assert run(points, 0.0, 0.0, -0.3, 0.0).verdict == guard.GuardVerdict.PASS
+    assert run(points, 0.0, 0.0, 0.3, 0.0).verdict == guard.GuardVerdict.VETOED
 
 
 def test_turning_in_place_that_swings_a_corner_into_a_box_is_vetoed():
     # A point just off the front-left corner: turning left swings the corner into it.
     points = [(0.16, 0.2)]
-    assert run(points, 0.0, 0.0, 0.0, 1.0).verdict != guard.Verdict.PASS
+    assert run(points, 0.0, 0.0, 0.0, 1.0).verdict != guard.GuardVerdict.PASS
 
 
 def test_zero_passes_and_the_margin_is_kept_while_moving_fast():
-    assert run(wall_ahead(0.3), 0.0, 0.0, 0.0, 0.0).verdict == guard.Verdict.PASS
+    assert run(wall_ahead(0.3), 0.0, 0.0, 0.0, 0.0).verdict == guard.GuardVerdict.PASS
     result = run(wall_ahead(1.0), 1.0, 0.0, 1.0, 0.0)
     poses = guard.predicted_poses(1.0, 0.0, result.linear_x, result.angular_z, SETTINGS)
     points = guard.scan_points(scan_of(wall_ahead(1.0)), LASER)

@@ -11,12 +11,13 @@ from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, o
 from closed_loop.control.guard import scan_points
 from closed_loop.control.local_planner import NavigatorError, plan, predict
 from closed_loop.control.navigator import NavigatorSettings
-from closed_loop.robot_model import Footprint, Pose2DInBase
+from closed_loop.geometry import Pose2D
+from closed_loop.robot_model import Footprint
 from closed_loop.control.scan import Scan
 
 FOOTPRINT = Footprint(-0.15, 0.15, -0.14, 0.14)      # the package's robot (urdf/closed_loop.urdf)
 JACKAL = Footprint(-0.254, 0.254, -0.2155, 0.2155)
-LASER = Pose2DInBase(0.0, 0.0, 0.0)
+LASER = Pose2D(0.0, 0.0, 0.0)
 RAYS = 720
 
 

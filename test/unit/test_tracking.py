@@ -3,11 +3,11 @@ import math
 
 import pytest
 
-from closed_loop.robot_model import Pose2DInBase
+from closed_loop.geometry import Pose2D
 from closed_loop.control.tracking import Tracker, TrackerSettings, clusters
 from test_navigator import scan_of
 
-LASER = Pose2DInBase(0.0, 0.0, 0.0)
+LASER = Pose2D(0.0, 0.0, 0.0)
 S = TrackerSettings()
 
 

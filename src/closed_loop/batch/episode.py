@@ -29,7 +29,7 @@ from typing import Optional
 from closed_loop.sim import clutter
 from closed_loop.controllers import ControllerError, controller_class, controller_classes
 from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
-from closed_loop.batch.judge import JudgeSettings
+from closed_loop.batch.judge import JudgeSettings, Verdict
 from closed_loop.sim.rig import Rig
 from closed_loop.settings import SettingsError, check
 from closed_loop.sim.world import load_world, parse_world, resolve_world
@@ -89,28 +89,17 @@ class EpisodeSpec:
 
 
 @dataclasses.dataclass
-class EpisodeResult:
-    """What one episode did: the judge's verdict (``closed_loop.batch.judge``: the outcome, 'reached',
+class EpisodeResult(Verdict):
+    """What one episode did: the judge's :class:`closed_loop.batch.judge.Verdict` (the outcome, 'reached',
     'stopped', 'failed', 'timed_out' or 'collided', by the rules written there; or 'error', when the
     episode could not run: ``error`` says why), the costs measured, and on request the trajectory: a row
     per judged instant (t, x, y, yaw, speed, command v, command w, mode)."""
-    outcome: str
-    mode: Optional[str] = None
-    time_s: float = 0.0
-    contacts: int = 0
-    min_clearance_m: float = math.inf
-    final_pose: tuple = (math.nan, math.nan, math.nan)
-    goal_error_m: Optional[float] = None
-    path_m: float = 0.0
-    peak_decel_mps2: float = 0.0
     wall_s: float = 0.0
     decision_ms: list = dataclasses.field(default_factory=list)
     #: Other costs the controller measured, {name: [ms, ...]} (the fusion controller's ``fusion_ms``).
     timings: dict = dataclasses.field(default_factory=dict)
     trajectory: Optional[list] = None
     error: Optional[str] = None
-    #: The verdict in one line (``closed_loop.batch.judge``).
-    why: str = ''
     #: A graph episode's folder of logs (None in process).
     logs: Optional[str] = None
 
@@ -266,6 +255,5 @@ def judge_settings(spec, controller_class):
 
 def result_from_verdict(verdict, **extra):
     """An :class:`EpisodeResult` with the :class:`closed_loop.batch.judge.Verdict`'s fields."""
-    fields = {f.name: getattr(verdict, f.name) for f in dataclasses.fields(verdict)
-              if f.name in EpisodeResult.__dataclass_fields__}
+    fields = {f.name: getattr(verdict, f.name) for f in dataclasses.fields(Verdict)}
     return EpisodeResult(**dict(fields, **extra))

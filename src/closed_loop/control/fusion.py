@@ -47,7 +47,7 @@ class FusionSettings:
 @dataclasses.dataclass(frozen=True)
 class CameraModel:
     """What the association needs of the camera: ``fx``, ``cx`` (px), the image width (px), and its pose
-    on the robot (``robot_model.Pose2DInBase`` of ``camera_link``, x forward)."""
+    on the robot (``geometry.Pose2D`` of ``camera_link``, x forward)."""
     fx: float
     cx: float
     width: int

@@ -31,7 +31,7 @@ PREDICTION_STEP_S = 0.02
 CLEARANCE_EPS_M = 1e-3
 
 
-class Verdict(enum.IntEnum):
+class GuardVerdict(enum.IntEnum):
     """What the guard did to a command; a larger value is more restrictive."""
     PASS = 0
     SLOWED = 1
@@ -68,7 +68,7 @@ class GuardResult:
     """The command to send (m/s, rad/s), what was done to it, and why."""
     linear_x: float
     angular_z: float
-    verdict: Verdict
+    verdict: GuardVerdict
     reason: str
     clearance_m: float  # least clearance along the chosen command's predicted path (inf: nothing seen)
 
@@ -76,7 +76,7 @@ class GuardResult:
 def scan_points(scan, laser_pose):
     """The scan's returns as an (N, 2) array of points in base_footprint (m).
 
-    ``laser_pose``: the laser frame's :class:`closed_loop.robot_model.Pose2DInBase`. REP 117: ``-inf``
+    ``laser_pose``: the laser frame's :class:`closed_loop.geometry.Pose2D`. REP 117: ``-inf``
     (closer than range_min) is a point at range_min; ``+inf`` and invalid rays give no point.
     """
     ranges = usable_ranges(scan)
@@ -167,7 +167,7 @@ def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
     """
     now = footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
     if v_cmd == 0.0 and w_cmd == 0.0:
-        return GuardResult(0.0, 0.0, Verdict.PASS, 'zero command', now)
+        return GuardResult(0.0, 0.0, GuardVerdict.PASS, 'zero command', now)
     full = None
     for scale in SCALES[:-1]:
         v, w = scale * v_cmd, scale * w_cmd
@@ -175,12 +175,12 @@ def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
         full = clearance if full is None else full
         if is_safe(now, clearance, settings.safety_margin):
             if scale == 1.0:
-                return GuardResult(v, w, Verdict.PASS, 'clear: %.2f m or more on the predicted path'
+                return GuardResult(v, w, GuardVerdict.PASS, 'clear: %.2f m or more on the predicted path'
                                    % min(clearance, 99.0), clearance)
-            return GuardResult(v, w, Verdict.SLOWED, 'slowed to %d%%: the full command (%.2f m/s, %.2f rad/s) '
+            return GuardResult(v, w, GuardVerdict.SLOWED, 'slowed to %d%%: the full command (%.2f m/s, %.2f rad/s) '
                                'would come within %.2f m of an obstacle (safety_margin %.2f m)'
                                % (round(100 * scale), v_cmd, w_cmd, full, settings.safety_margin), clearance)
     braking = path_clearance(points, footprint, predicted_poses(v0, w0, 0.0, 0.0, settings))
-    return GuardResult(0.0, 0.0, Verdict.VETOED, 'vetoed (%.2f m/s, %.2f rad/s): even %d%% of it would come '
+    return GuardResult(0.0, 0.0, GuardVerdict.VETOED, 'vetoed (%.2f m/s, %.2f rad/s): even %d%% of it would come '
                        'within %.2f m of an obstacle (safety_margin %.2f m)'
                        % (v_cmd, w_cmd, round(100 * SCALES[-2]), full, settings.safety_margin), braking)

@@ -151,7 +151,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.control.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
-    frame (:class:`closed_loop.robot_model.Pose2DInBase`); ``footprint``: the robot's rectangle; ``v0``,
+    frame (:class:`closed_loop.geometry.Pose2D`); ``footprint``: the robot's rectangle; ``v0``,
     ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m);
     ``remembered``: (M, 2) points of earlier scans in the robot's frame (``closed_loop.control.scan_memory``), used
     to choose the way around, and for safety only where the scanner cannot see now; ``turning``: +1 or -1 while the last decision was a

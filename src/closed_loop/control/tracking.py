@@ -63,7 +63,7 @@ class Cluster:
 
 def clusters(scan, laser_pose, robot_pose, settings):
     """The scan's clusters (:class:`Cluster`), in odom. ``laser_pose``: the laser in the base frame
-    (``robot_model.Pose2DInBase``); ``robot_pose``: (x, y, yaw) of the base in odom at the scan."""
+    (``geometry.Pose2D``); ``robot_pose``: (x, y, yaw) of the base in odom at the scan."""
     ranges = usable_ranges(scan)
     angles = sample_angles(scan) + laser_pose.yaw
     valid = numpy.isfinite(ranges)

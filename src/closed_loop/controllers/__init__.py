@@ -50,7 +50,7 @@ class Log:
 
 
 #: What a controller knows of the robot and the task: the laser's pose on the base
-#: (``robot_model.Pose2DInBase``), the footprint rectangle (None where the host has no robot model), the
+#: (``geometry.Pose2D``), the footprint rectangle (None where the host has no robot model), the
 #: goal (x, y) in odom or None, the camera's pose on the base (None: no camera), and the :class:`Log`.
 Context = collections.namedtuple('Context', 'laser_pose footprint goal camera_pose log')
 Context.__new__.__defaults__ = (None, None, None, None)

@@ -9,7 +9,7 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from closed_loop.watchdog import SilenceWatchdog
-from closed_loop.control.guard import GuardSettings, Verdict, filter_command, scan_points, scan_problem
+from closed_loop.control.guard import GuardSettings, GuardVerdict, filter_command, scan_points, scan_problem
 from closed_loop.nodes.common import (LiveSettings, StopsOnShutdown, frame_id, init_node, load_settings,
                                       robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
@@ -108,7 +108,7 @@ class CmdVelGuard(StopsOnShutdown):
     def _on_silence(self, silent_s):
         with self.lock:
             if not self._closing:
-                self._send(0.0, 0.0, Verdict.VETOED, 'no scan received for %.2f s of wall time '
+                self._send(0.0, 0.0, GuardVerdict.VETOED, 'no scan received for %.2f s of wall time '
                            '(scan_timeout %.2f s)' % (silent_s, self.settings.scan_timeout))
 
     # -- the one decision path (lock held) ---------------------------------------------------------------
@@ -119,17 +119,17 @@ class CmdVelGuard(StopsOnShutdown):
         now = rospy.Time.now().to_sec()
         v_cmd, w_cmd, cmd_t, conflict = self._cmd
         if conflict is not None:
-            result = (0.0, 0.0, Verdict.VETOED, conflict)
+            result = (0.0, 0.0, GuardVerdict.VETOED, conflict)
         elif now - cmd_t > s.cmd_timeout or now < cmd_t - s.cmd_timeout:
-            result = (0.0, 0.0, Verdict.VETOED, 'input command is %.2f s old (cmd_timeout %.2f s)'
+            result = (0.0, 0.0, GuardVerdict.VETOED, 'input command is %.2f s old (cmd_timeout %.2f s)'
                       % (now - cmd_t, s.cmd_timeout))
         elif self._scan_refused is not None:
-            result = (0.0, 0.0, Verdict.VETOED, self._scan_refused)
+            result = (0.0, 0.0, GuardVerdict.VETOED, self._scan_refused)
         else:
             scan = self._scan[0] if self._scan is not None else None
             problem = scan_problem(scan, None if scan is None else now - scan.stamp_s, s.scan_timeout)
             if problem is not None:
-                result = (0.0, 0.0, Verdict.VETOED, problem)
+                result = (0.0, 0.0, GuardVerdict.VETOED, problem)
             else:
                 v0, w0 = self._sent
                 if self._odom is not None and abs(now - self._odom[2]) <= s.scan_timeout:
@@ -147,7 +147,7 @@ class CmdVelGuard(StopsOnShutdown):
         self._sent = (v, w)
         # Each verdict is logged once, on entry, with its reason: a robot held at a wall is a standing state.
         if verdict != self._verdict:
-            log = rospy.loginfo if verdict == Verdict.PASS else rospy.logwarn
+            log = rospy.loginfo if verdict == GuardVerdict.PASS else rospy.logwarn
             log('%s -> %s: %s', self._verdict.name if self._verdict is not None else '-', verdict.name, reason)
             self._verdict = verdict
             self.verdict_pub.publish(String(data=verdict.name))

@@ -1,4 +1,5 @@
 """Helpers shared by the node classes: start-up, settings from ``~`` parameters, stamps."""
+import math
 import os
 import sys
 import tempfile
@@ -136,6 +137,23 @@ def robot_geometry(scan_frame, needs_it):
     except robot_model.RobotModelError as error:
         rospy.logfatal('%s', error)
         raise SystemExit(1)
+
+
+def goal_param():
+    """(x, y) from ``~goal_x`` and ``~goal_y`` (m, finite), or None when neither is set; a node given one without
+    the other, or a value that is not a finite number, logs FATAL naming them and exits with status 2."""
+    has_x, has_y = rospy.has_param('~goal_x'), rospy.has_param('~goal_y')
+    if has_x != has_y:
+        rospy.logfatal('%s: bad parameter: give both ~goal_x and ~goal_y, or neither', rospy.get_name())
+        raise SystemExit(2)
+    if not has_x:
+        return None
+    goal = rospy.get_param('~goal_x'), rospy.get_param('~goal_y')
+    if not all(isinstance(g, (int, float)) and not isinstance(g, bool) and math.isfinite(g) for g in goal):
+        rospy.logfatal('%s: bad parameter ~goal_x, ~goal_y: expected finite numbers (m), got %r'
+                       % (rospy.get_name(), goal))
+        raise SystemExit(2)
+    return float(goal[0]), float(goal[1])
 
 
 def stamp_to_sec(stamp):

@@ -18,9 +18,9 @@ from std_msgs.msg import String
 from closed_loop import robot_model
 from closed_loop.commands import CommandError
 from closed_loop.controllers import STOP, Context, ControllerError, Log, Odom, controller_class
-from closed_loop.geometry import quaternion_yaw
-from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, StopsOnShutdown, frame_id, init_node,
-                                      load_settings, robot_geometry, stamp_to_sec)
+from closed_loop.geometry import Pose2D, quaternion_yaw
+from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, StopsOnShutdown, frame_id, goal_param,
+                                      init_node, load_settings, robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
 from closed_loop.nodes.drawing_messages import PUBLICATIONS, to_message
 from closed_loop.sources import SourceCheck
@@ -80,7 +80,7 @@ class ControllerNode(StopsOnShutdown):
         self.cls = cls
         self.settings = load_settings(cls.settings_class)
         extras = [load_settings(c) for c in cls.extra_settings_classes]
-        goal = self._goal_from_params() if cls.uses_goal else None
+        goal = goal_param() if cls.uses_goal else None
         self.frames = {'base': frame_id(robot_model.BASE_FRAME), 'odom': frame_id(ODOM_FRAME)}
         self.lock = threading.Lock()
         self.odom = None
@@ -120,7 +120,7 @@ class ControllerNode(StopsOnShutdown):
         if self.cls.needs_footprint:
             footprint, laser_pose = robot_geometry(scan_frame, self.cls.name)
         else:
-            footprint, laser_pose = None, robot_model.Pose2DInBase(0.0, 0.0, 0.0)
+            footprint, laser_pose = None, Pose2D(0.0, 0.0, 0.0)
             urdf = rospy.get_param('robot_description', None)
             try:
                 if not isinstance(urdf, str) or not urdf.strip():
@@ -138,20 +138,6 @@ class ControllerNode(StopsOnShutdown):
                 rospy.loginfo("no %s in robot_description: the belief is the LIDAR's alone",
                               robot_model.CAMERA_FRAME)
         return Context(laser_pose, footprint, goal, camera_pose, RosLog())
-
-    def _goal_from_params(self):
-        has_x, has_y = rospy.has_param('~goal_x'), rospy.has_param('~goal_y')
-        if has_x != has_y:
-            rospy.logfatal('%s: bad parameter: give both ~goal_x and ~goal_y, or neither', rospy.get_name())
-            raise SystemExit(2)
-        if not has_x:
-            return None
-        goal = rospy.get_param('~goal_x'), rospy.get_param('~goal_y')
-        if not all(isinstance(g, (int, float)) and not isinstance(g, bool) and math.isfinite(g) for g in goal):
-            rospy.logfatal('%s: bad parameter ~goal_x, ~goal_y: expected finite numbers (m), got %r'
-                           % (rospy.get_name(), goal))
-            raise SystemExit(2)
-        return float(goal[0]), float(goal[1])
 
     def _take_settings(self, settings):
         # From dynamic_reconfigure: the next scan and the next tick decide with the new values.

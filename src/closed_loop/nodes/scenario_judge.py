@@ -1,6 +1,5 @@
 """scenario_judge: the judge (``closed_loop.batch.judge``) in a ROS graph, watching the simulator's ground truth."""
 import json
-import math
 import os
 import tempfile
 import threading
@@ -15,7 +14,7 @@ from std_msgs.msg import Float32, String, UInt32
 
 from closed_loop.batch.judge import Judge, JudgeSettings, StartSettings
 from closed_loop.geometry import quaternion_yaw
-from closed_loop.nodes.common import init_node, load_settings, stamp_to_sec
+from closed_loop.nodes.common import goal_param, init_node, load_settings, stamp_to_sec
 from closed_loop.sim.simulation import SimSettings
 
 #: A command older than this (s, simulated) is no longer the base's: its watchdog has braked it to zero.
@@ -41,7 +40,7 @@ class ScenarioJudge:
 
     def __init__(self):
         self.settings = load_settings(JudgeSettings)
-        self.goal = self._goal()
+        self.goal = goal_param()
         self.verdict_file = rospy.get_param('~verdict_file', '')
         self.judge = Judge(self.settings, self.goal)
         self.lock = threading.Lock()
@@ -87,20 +86,6 @@ class ScenarioJudge:
             rospy.ServiceProxy(self.start.unpause, Empty)()
         except (rospy.ROSException, rospy.ServiceException) as error:
             rospy.logerr('cannot start the simulation (%s): %s', self.start.unpause, error)
-
-    def _goal(self):
-        has_x, has_y = rospy.has_param('~goal_x'), rospy.has_param('~goal_y')
-        if has_x != has_y:
-            rospy.logfatal('%s: bad parameter: give both ~goal_x and ~goal_y, or neither', rospy.get_name())
-            raise SystemExit(2)
-        if not has_x:
-            return None
-        goal = rospy.get_param('~goal_x'), rospy.get_param('~goal_y')
-        if not all(isinstance(g, (int, float)) and not isinstance(g, bool) and math.isfinite(g) for g in goal):
-            rospy.logfatal('%s: bad parameter ~goal_x, ~goal_y: expected finite numbers (m), got %r'
-                           % (rospy.get_name(), goal))
-            raise SystemExit(2)
-        return float(goal[0]), float(goal[1])
 
     def _on_contacts(self, msg):
         with self.lock:

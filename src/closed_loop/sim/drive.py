@@ -105,7 +105,7 @@ def body_twist(left_rps, right_rps, wheel_separation_m, wheel_radius_m):
                      wheel_radius_m * (right_rps - left_rps) / wheel_separation_m)
 
 
-class Odometry2D:
+class DeadReckoning:
     """Dead reckoning from wheel speeds: pose (x, y, yaw) in the odom frame, which starts at the origin."""
 
     def __init__(self):

@@ -31,7 +31,8 @@ OWN_SENSOR_GROUP_BIT = 8
 
 
 @dataclass(frozen=True)
-class Pose3D:
+class BodyPose:
+    """A body's pose in the world as pybullet gives it: a position in 3-D and an orientation quaternion."""
     position: tuple     # (x, y, z) m
     orientation: tuple  # quaternion (x, y, z, w)
 
@@ -67,7 +68,7 @@ class Robot:
         # The track the kinematics use: the wheels' geometric one, times the multiplier (skid steer).
         self.track_m = self.model.wheel_separation_m * s.wheel_separation_multiplier
         self.watchdog = drive.CommandWatchdog(s.cmd_vel_timeout)
-        self.odometry = drive.Odometry2D()
+        self.odometry = drive.DeadReckoning()
         self._twist = drive.STOP
         self._wheel_targets = None
         self._build()
@@ -181,13 +182,13 @@ class Robot:
         """(pose of base_footprint in the world frame, (linear xyz, angular xyz) in the world frame)."""
         position, orientation = self._call(pybullet.getBasePositionAndOrientation, self.robot_id)
         linear, angular = self._call(pybullet.getBaseVelocity, self.robot_id)
-        return Pose3D(tuple(position), tuple(orientation)), (tuple(linear), tuple(angular))
+        return BodyPose(tuple(position), tuple(orientation)), (tuple(linear), tuple(angular))
 
     def link_pose(self, link_name):
         """World pose of a URDF link frame (not its centre of mass)."""
         state = self._call(pybullet.getLinkState, self.robot_id, self._links[link_name],
                            computeForwardKinematics=True)
-        return Pose3D(tuple(state[4]), tuple(state[5]))
+        return BodyPose(tuple(state[4]), tuple(state[5]))
 
     def commanded_twist(self):
         """The ramped twist the wheels are being driven at."""

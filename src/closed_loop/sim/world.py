@@ -30,6 +30,7 @@ import os
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
+from closed_loop.geometry import Pose2D  # noqa: F401  (a world's start and goal poses; closed_loop.sim.world.Pose2D)
 from closed_loop.sim import shapes
 from closed_loop.sim.world_robots import RobotSpec, check_robots_apart, check_start, parse_robots
 from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
@@ -82,14 +83,6 @@ class WorldError(FileError):
     ``"worlds/wall.yaml: obstacles[0].size: expected 3 numbers > 0 (m), got [0.1, 4.0]"``, on one line
     and quoting at most a short excerpt (:class:`closed_loop.yaml_check.FileError`).
     """
-
-
-@dataclass(frozen=True)
-class Pose2D:
-    """A pose on the ground plane: x, y in m, yaw in rad (counter-clockwise from +x)."""
-    x: float
-    y: float
-    yaw: float
 
 
 @dataclass(frozen=True)

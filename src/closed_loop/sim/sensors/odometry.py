@@ -19,7 +19,7 @@ class OdometryReading:
     y: float
     yaw: float
     twist: object   # commands.VelocityCommand
-    truth_pose: object   # robot_body.Pose3D
+    truth_pose: object   # robot_body.BodyPose
     truth_velocity: tuple  # ((vx, vy, vz), (wx, wy, wz)) m/s, rad/s in world
 
 
