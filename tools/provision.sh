@@ -5,7 +5,8 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
 
-# Debian bookworm's own ROS 1 (in /usr) and the tools the tests use.
+# Debian bookworm's own ROS 1 (in /usr) and the tools the tests use (chromium: a sweep's report.html is opened
+# in a real headless browser; util-linux: unshare, which keeps that browser off the network).
 APT_PACKAGES=(
   catkin python3-catkin-pkg python3-setuptools python3-venv python3-pip python3-pytest python3-yaml
   python3-rospy python3-rostest python3-rosbag python3-roslaunch python3-rosnode python3-rostopic
@@ -15,6 +16,7 @@ APT_PACKAGES=(
   ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs
   librostest-dev rosout rosbash ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
   libroscpp-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
+  chromium util-linux
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

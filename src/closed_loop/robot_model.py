@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from closed_loop.geometry import Pose2D
+from closed_loop.geometry import Pose2D, matrix_quaternion
 
 #: The default robot's names (urdf/closed_loop.urdf). A robot profile (config/robots/<name>.yaml) names its own
 #: frames and joints through the simulator's parameters; these are only the defaults of those parameters.
@@ -184,6 +184,21 @@ def link_transforms(urdf_text, root=BASE_FRAME, source='robot_description'):
             poses[child] = poses[parent] @ origin
             todo.append(child)
     return robot, poses
+
+
+def fixed_joints(urdf_text, source='robot_description'):
+    """[(parent link, child link, (x, y, z) m, quaternion (x, y, z, w))] of every fixed joint, as
+    robot_state_publisher sends them on /tf_static."""
+    robot = _parse_urdf_text(urdf_text, source)
+    out = []
+    for joint in robot.findall('joint'):
+        parent, child = joint.find('parent'), joint.find('child')
+        if joint.get('type') != 'fixed' or parent is None or child is None:
+            continue
+        m = _origin_matrix(joint)
+        out.append((parent.get('link'), child.get('link'), tuple(float(v) for v in m[:3, 3]),
+                    matrix_quaternion(m[:3, :3].tolist())))
+    return out
 
 
 def _shape_corners(geometry):

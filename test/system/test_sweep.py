@@ -48,11 +48,15 @@ def test_a_tiny_sweep_on_a_local_cluster_writes_rows_summary_plot_and_a_recommen
     printed = capsys.readouterr().out
     assert 'rule: recommended stop_distance: the smallest tried' in printed
     assert 'cruise 0.50 m/s: stop_distance 0.30 m, slow_distance 0.80 m' in printed
+    page = (out / 'report.html').read_text()
+    assert page.index('rule: recommended stop_distance') < page.index('cruise 0.50 m/s: stop_distance 0.30 m') \
+        < page.index('<h2>Summary')
+    assert (tmp_path / 'out' / 'report.html').exists() and (out / 'pictures' / 'episode-00000.png').exists()
 
 
 @pytest.mark.parametrize('text, message', [
     ('name: x\ngrid: [1, 2\n', 'not valid YAML'),
-    ('name: x\ngrid: {seed: [0]}\ncolour: red\n', 'colour: expected only name, base, grid and plot'),
+    ('name: x\ngrid: {seed: [0]}\ncolour: red\n', 'colour: expected only name, base, grid, plot and report'),
     ('name: x\ngrid: {speed: [0.5]}\n', 'grid.speed: expected an episode field'),
     ('name: x\ngrid: {settings.stop_distance: {from: 0.5, to: 0.1, step: 0.1}}\n', 'expected step > 0 and to >= from'),
     ('name: x\ngrid: {settings.stop_distance: [0.5, 1.5]}\n', 'settings.stop_distance=1.5'),

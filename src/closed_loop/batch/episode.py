@@ -92,13 +92,15 @@ class EpisodeSpec:
 class EpisodeResult(Verdict):
     """What one episode did: the judge's :class:`closed_loop.batch.judge.Verdict` (the outcome, 'reached',
     'stopped', 'failed', 'timed_out' or 'collided', by the rules written there; or 'error', when the
-    episode could not run: ``error`` says why), the costs measured, and on request the trajectory: a row
-    per judged instant (t, x, y, yaw, speed, command v, command w, mode)."""
+    episode could not run: ``error`` says why), the costs measured, and on request (``keep_trajectory``)
+    the trajectory, a row per judged instant (t, x, y, yaw, speed, command v, command w, mode, clearance:
+    ``closed_loop.batch.judge.TRACK_FIELDS``), and the contacts, a row each (t, x, y, yaw, [obstacles])."""
     wall_s: float = 0.0
     decision_ms: list = dataclasses.field(default_factory=list)
     #: Other costs the controller measured, {name: [ms, ...]} (the fusion controller's ``fusion_ms``).
     timings: dict = dataclasses.field(default_factory=dict)
     trajectory: Optional[list] = None
+    contact_log: Optional[list] = None
     error: Optional[str] = None
     #: A graph episode's folder of logs (None in process).
     logs: Optional[str] = None
@@ -233,16 +235,18 @@ def prepare(spec, cache=None):
     return Prepared(profile, cls, world, settings, sim_params, goal, goal_world, extra, graph)
 
 
-def run_episode(spec, cache=None, logs=None):
+def run_episode(spec, cache=None, logs=None, tap=None):
     """Run ``spec`` (an :class:`EpisodeSpec`): its controller's core in lockstep with the simulation
-    (``closed_loop.batch.lockstep``), or a graph (``closed_loop.batch.graph_episode``, its folder under
-    ``logs``, a new folder if None). An unusable spec raises :class:`EpisodeError`."""
+    (``closed_loop.batch.lockstep``, shown to ``tap`` if given), or a graph (``closed_loop.batch.graph_episode``,
+    its folder under ``logs``, a new folder if None). An unusable spec raises :class:`EpisodeError`."""
     prepared = prepare(spec, cache)
     if prepared.graph is not None:
+        if tap is not None:
+            raise EpisodeError('controller: a graph episode runs in its own processes; it has no loop to tap')
         from closed_loop.batch.graph_episode import run_graph
         return run_graph(spec, prepared, logs)
     from closed_loop.batch.lockstep import run_in_process
-    return run_in_process(spec, prepared)
+    return run_in_process(spec, prepared, tap)
 
 
 def judge_settings(spec, controller_class):

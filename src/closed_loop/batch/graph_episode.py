@@ -25,7 +25,7 @@ import yaml
 
 from closed_loop.batch import graph_keeper
 from closed_loop.batch.episode import EpisodeError, judge_settings, result_from_verdict
-from closed_loop.batch.judge import Verdict
+from closed_loop.batch.judge import Verdict, track_from_dict
 from closed_loop.sim import clutter
 
 #: Simulated s per wall s in a graph episode, unless the spec says: the fastest at which a graph episode
@@ -113,7 +113,7 @@ def launch_text(spec, prepared, folder):
     args = {'world': world, 'robot': spec.robot, 'real_time_factor': rtf, 'camera': p.sim_params['camera'],
             'time_limit': judge.time_limit, 'end_on_contact': judge.end_on_contact,
             'end_at_rest': c.get('end_at_rest', judge.end_at_rest), 'success_radius': judge.success_radius,
-            'verdict_file': os.path.join(folder, 'verdict.json')}
+            'verdict_file': os.path.join(folder, 'verdict.json'), 'keep_track': spec.keep_trajectory}
     if p.goal_world is not None:
         args['goal_x'], args['goal_y'] = p.goal_world
     node = c.get('node')
@@ -201,7 +201,7 @@ def run_graph(spec, prepared, folder=None):
             keeper = subprocess.Popen([sys.executable, graph_keeper.__file__, folder, launch_file], stdin=subprocess.PIPE,
                                       stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
         try:
-            verdict, error = _wait(spec, folder, keeper)
+            verdict, track, error = _wait(spec, folder, keeper)
         finally:
             keeper.stdin.close()                 # the keeper shuts the graph down
             try:
@@ -215,7 +215,7 @@ def run_graph(spec, prepared, folder=None):
         c = prepared.graph
         error = '%s: %s' % (c['launch'] if 'launch' in c else 'node ' + c['node'], error)
         return result_from_verdict(Verdict('error', why=error), error=error, logs=folder, wall_s=wall_s)
-    return result_from_verdict(verdict, logs=folder, wall_s=wall_s)
+    return result_from_verdict(verdict, logs=folder, wall_s=wall_s, trajectory=track[0], contact_log=track[1])
 
 
 def _set_aside(folder):
@@ -227,23 +227,26 @@ def _set_aside(folder):
 
 
 def _wait(spec, folder, keeper):
-    """(the verdict, None) or (None, why there is none)."""
+    """(the verdict, (its trajectory, contact log) or Nones, None) or (None, None, why there is none)."""
     rtf = spec.real_time_factor or REAL_TIME_FACTOR
     deadline = time.monotonic() + STARTUP_S + spec.time_limit_s / rtf + SLACK_S
     verdict_file = os.path.join(folder, 'verdict.json')
     while time.monotonic() < deadline:
         if os.path.exists(verdict_file):
             with open(verdict_file) as f:
-                return Verdict.from_dict(json.load(f)), None
+                data = json.load(f)
+            track = track_from_dict(data)
+            data.pop('trajectory', None), data.pop('contact_log', None)
+            return Verdict.from_dict(data), track, None
         failed = _failed(folder)
         if failed is not None and isinstance(failed[1], int):
-            return None, 'node %s died (exit code %d): %s' % (failed[0], failed[1], _node_log(folder, failed[0]))
+            return None, None, 'node %s died (exit code %d): %s' % (failed[0], failed[1], _node_log(folder, failed[0]))
         if failed is not None:
-            return None, 'roslaunch could not start node %s: %s' % failed
+            return None, None, 'roslaunch could not start node %s: %s' % failed
         if keeper.poll() is not None:
             if os.path.exists(os.path.join(folder, 'keeper_error')):
-                return None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))
-            return None, 'the launch ended before a verdict: %s' % _tail(os.path.join(folder, 'graph.log'))
+                return None, None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))
+            return None, None, 'the launch ended before a verdict: %s' % _tail(os.path.join(folder, 'graph.log'))
         time.sleep(0.2)
-    return None, 'no verdict within %.0f s of wall time: %s' % (
+    return None, None, 'no verdict within %.0f s of wall time: %s' % (
         STARTUP_S + spec.time_limit_s / rtf + SLACK_S, _tail(os.path.join(folder, 'graph.log')))

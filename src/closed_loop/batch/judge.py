@@ -93,11 +93,30 @@ class Verdict:
         return cls(**data)
 
 
-class Judge:
-    """See the module's docstring. ``goal``: (x, y) in the world frame, or None."""
+#: A track's row: the robot at one judged instant (``Judge(keep_track=True)``).
+TRACK_FIELDS = ('t', 'x', 'y', 'yaw', 'speed', 'command_v', 'command_w', 'mode', 'clearance')
 
-    def __init__(self, settings, goal=None):
+
+def track_from_dict(data):
+    """(trajectory, contact_log) from :meth:`Judge.track_dict`'s values (None for what is not there)."""
+    rows = data.get('trajectory')
+    if rows is not None:
+        rows = [tuple(row[:-1]) + (math.inf if row[-1] is None else row[-1],) for row in rows]
+    log = data.get('contact_log')
+    return rows, None if log is None else [tuple(row) for row in log]
+
+
+class Judge:
+    """See the module's docstring. ``goal``: (x, y) in the world frame, or None. ``keep_track``: keep
+    :attr:`track`, a row per judged instant (:data:`TRACK_FIELDS`: the clearance is the latest given, +inf
+    beyond the lookout), and :attr:`contact_log`, a row per contact begun (t, x, y, yaw, [obstacle names]),
+    for a picture of the episode (``closed_loop.batch.pictures``)."""
+
+    def __init__(self, settings, goal=None, keep_track=False):
         self.settings = settings
+        self.track = [] if keep_track else None
+        self.contact_log = [] if keep_track else None
+        self._clearance_now = math.inf
         self.goal = None if goal is None else (float(goal[0]), float(goal[1]))
         self.contacts = 0
         self.commands = 0
@@ -117,9 +136,13 @@ class Judge:
         """True when ground truth at ``t_s`` is to be observed (every ``period`` s of simulated time)."""
         return not self.ended and t_s >= self._next_s - 1e-9
 
-    def on_contact(self, t_s, count=1):
-        """``count`` contacts began at ``t_s``."""
+    def on_contact(self, t_s, count=1, names=(), pose=None):
+        """``count`` contacts began at ``t_s``, with the obstacles ``names`` (where known), the robot at ``pose``
+        (x, y, yaw; default: as last observed)."""
         self.contacts += count
+        if count and self.contact_log is not None:
+            x, y, yaw = pose or self._pose or (math.nan, math.nan, math.nan)
+            self.contact_log.append((t_s, x, y, yaw, list(names)))
         if count and self.settings.end_on_contact and not self.ended:
             self._end(t_s)
 
@@ -129,6 +152,7 @@ class Judge:
 
     def on_clearance(self, clearance_m):
         self.clearance = min(self.clearance, clearance_m)
+        self._clearance_now = clearance_m
 
     def goal_error(self, x, y):
         return None if self.goal is None else math.hypot(self.goal[0] - x, self.goal[1] - y)
@@ -147,6 +171,9 @@ class Judge:
                 self.peak_decel = max(self.peak_decel, (abs(speed0) - abs(speed)) / (t_s - t0))
         self._last = (t_s, x, y, speed)
         self._pose = (x, y, yaw)
+        if self.track is not None:
+            v, w = command if command is not None else (0.0, 0.0)
+            self.track.append((t_s, x, y, yaw, speed, v, w, mode, self._clearance_now))
         zero = command is None or (command[0] == 0.0 and command[1] == 0.0)
         at_rest = abs(speed) < s.rest_speed and abs(yaw_rate) < s.rest_yaw_rate and zero
         self._rest_since = (self._rest_since if self._rest_since is not None else t_s) if at_rest else None
@@ -186,6 +213,11 @@ class Judge:
         time_s = self.ended_s if self.ended_s is not None else t_s
         return Verdict(outcome, self.mode, time_s, self.contacts, self.clearance, tuple(pose), error,
                        self.path_m, self.peak_decel, self.commands, self.describe(outcome, time_s, pose, error))
+
+    def track_dict(self):
+        """The track and the contact log as plain values (JSON: a clearance beyond the lookout is null)."""
+        return {'trajectory': [list(row[:-1]) + [row[-1] if math.isfinite(row[-1]) else None] for row in self.track],
+                'contact_log': [list(row) for row in self.contact_log]}
 
     def describe(self, outcome, time_s, pose, error):
         """The verdict in one line: what, where, when, how close it came, contacts."""

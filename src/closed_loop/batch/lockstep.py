@@ -36,8 +36,33 @@ from closed_loop.sim.sensors.contacts import Contacts
 from closed_loop.sim.sensors.lidar import Lidar
 
 
-def run_in_process(spec, prepared):
-    """Run the episode ``spec``, resolved as ``prepared`` (``closed_loop.batch.episode.prepare``)."""
+class Tap:
+    """What an episode's loop shows to an onlooker (``closed_loop.nodes.episode_bag`` writes it to a bag): the
+    readings the controller gets and the commands it sends, as they happen, on simulated time. An onlooker
+    must not sample a sensor that keeps state (the LIDAR's noise, the contacts): the loop hands it those."""
+
+    def begin(self, rig, controller, judge):
+        """Before the first step: the simulation, its sensors, the controller and the judge."""
+
+    def scan(self, t_s, ranges):
+        """The LIDAR's reading at ``t_s``, as the controller got it."""
+
+    def frame(self, t_s, rgb):
+        """A camera frame at ``t_s`` (for a controller that looks at it)."""
+
+    def decided(self, t_s):
+        """The controller was called at ``t_s`` (its mode changes and drawings are there to take)."""
+
+    def command(self, t_s, command):
+        """The controller sent ``command`` (a VelocityCommand) at ``t_s``."""
+
+    def stepped(self, t_s, began):
+        """Physics stepped to ``t_s``; contacts with the obstacles ``began`` started."""
+
+
+def run_in_process(spec, prepared, tap=None):
+    """Run the episode ``spec``, resolved as ``prepared`` (``closed_loop.batch.episode.prepare``); ``tap``: a
+    :class:`Tap` that sees it run."""
     started = time.monotonic()
     p = prepared
     laser_pose = p.profile.laser_pose(p.settings.scan_frame)
@@ -50,15 +75,16 @@ def run_in_process(spec, prepared):
         controller = p.controller_class(p.settings, Context(laser_pose, p.profile.footprint, p.goal_odom,
                                                             camera_pose), *p.extra_settings)
         controller.record_timings = True
-        judge = Judge(judge_settings(spec, p.controller_class), p.goal_world)
-        trajectory = [] if spec.keep_trajectory else None
-        _loop(spec, rig, controller, judge, trajectory)
+        judge = Judge(judge_settings(spec, p.controller_class), p.goal_world, keep_track=spec.keep_trajectory)
+        tap = tap or Tap()
+        tap.begin(rig, controller, judge)
+        _loop(spec, rig, controller, judge, tap)
         verdict = judge.verdict(rig.sim.time_s, _pose(rig.sim))
     finally:
         rig.close()
     return result_from_verdict(verdict, decision_ms=getattr(controller, 'decision_ms', []),
-                               timings=dict(getattr(controller, 'timings', {})), trajectory=trajectory,
-                               wall_s=time.monotonic() - started)
+                               timings=dict(getattr(controller, 'timings', {})), trajectory=judge.track,
+                               contact_log=judge.contact_log, wall_s=time.monotonic() - started)
 
 
 def _pose(sim):
@@ -66,7 +92,7 @@ def _pose(sim):
     return pose.position[0], pose.position[1], quaternion_yaw(pose.orientation)
 
 
-def _loop(spec, rig, controller, judge, trajectory):
+def _loop(spec, rig, controller, judge, tap):
     sim = rig.sim
     lidar = rig.sensors[Lidar]
     contacts = rig.sensors[Contacts]
@@ -97,19 +123,25 @@ def _loop(spec, rig, controller, judge, trajectory):
         if scan_due:
             scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
                         lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
+            tap.scan(now, scan.ranges)
             sent = controller.on_scan(now, scan, odom)
         if frame_due:
             # What vision_node does in the graph: a red_centroid only for a frame with red in it.
-            found = detect_red(cv2.cvtColor(camera.sample(sim), cv2.COLOR_RGB2BGR), vision)
+            rgb = camera.sample(sim)
+            tap.frame(now, rgb)
+            found = detect_red(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), vision)
             if found.detected:
                 controller.on_detection(found.centroid_px[0], now, odom)
         if tick_due:
             sent = controller.on_tick(now, odom)
+        if scan_due or frame_due or tick_due:
+            tap.decided(now)
             controller.take_transitions()       # what the node logs; an episode keeps only the mode
-        if (judge.due(now) or k == last) and _judge(sim, judge, now, command, controller.mode, lookout, trajectory):
+        if (judge.due(now) or k == last) and _judge(sim, judge, now, command, controller.mode, lookout):
             return
         if sent is not None:
             pending.append((k + delay, validate_command(*sent)))
+            tap.command(now, pending[-1][1])
         while pending and pending[0][0] <= k:
             _, cmd = pending.pop(0)
             command = (cmd.linear_x, cmd.angular_z)
@@ -117,19 +149,18 @@ def _loop(spec, rig, controller, judge, trajectory):
             judge.on_command()
         sim.step()
         began = contacts.sample(sim)
+        tap.stepped(sim.time_s, began)
         if began:
-            judge.on_contact(sim.time_s, len(began))
+            judge.on_contact(sim.time_s, len(began), began, _pose(sim) if judge.contact_log is not None else None)
             if judge.ended:
                 return
 
 
-def _judge(sim, judge, now, command, mode, lookout, trajectory):
+def _judge(sim, judge, now, command, mode, lookout):
     """Show the judge the robot's ground truth now; True once the episode is over."""
     pose, (linear, angular) = sim.ground_truth()
     x, y = pose.position[:2]
     yaw = quaternion_yaw(pose.orientation)
     speed = linear[0] * math.cos(yaw) + linear[1] * math.sin(yaw)       # forward, signed
     judge.on_clearance(sim.clearance(lookout))
-    if trajectory is not None:
-        trajectory.append((now, x, y, yaw, speed, command[0], command[1], mode))
     return judge.observe(now, x, y, yaw, speed, angular[2], command, mode)

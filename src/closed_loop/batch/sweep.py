@@ -8,28 +8,34 @@ tcp://HOST:PORT`` sends them to a cluster already running (``dask scheduler`` an
 on machines that have this package installed). Each finished episode is one row of
 ``OUTPUT/rows.csv`` at once (the spec, as JSON and one column per grid key, and the result), so an
 interrupted sweep keeps what it did, and ``--resume`` runs only what is missing. An episode that
-raises is a row with outcome ``error`` and its message; the sweep goes on. At the end: a summary table
-(also ``OUTPUT/summary.txt``) and ``OUTPUT/plot.png``. A graph episode (a controller that is a launch file
+raises is a row with outcome ``error`` and its message; the sweep goes on. Episodes not as meant (collided, failed, timed
+out, error, any contact) get a picture, drawn where they ran (``OUTPUT/pictures/episode-INDEX.png``; the sweep
+file's ``report:`` chooses, ``closed_loop.batch.pictures``). At the end: a summary table (also
+``OUTPUT/summary.txt``), ``OUTPUT/plot.png`` and ``OUTPUT/report.html`` (``closed_loop.batch.sweep_report``). A graph episode (a controller that is a launch file
 or a node: ``closed_loop.batch.graph_episode``) keeps its files in ``OUTPUT/graphs/episode-INDEX``; when a
 local cluster closes, done or interrupted, the sweep waits for those graphs to be down.
 """
 import argparse
 import csv
+import dataclasses
 import json
 import math
 import os
 import sys
+import itertools
 import time
 
-import numpy
-
-from closed_loop.batch import graph_keeper, sweep_file
+from closed_loop.batch import graph_keeper, pictures, sweep_file, sweep_report
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 
 RESULT_COLUMNS = ('outcome', 'mode', 'time_s', 'contacts', 'min_clearance_m', 'final_x', 'final_y', 'final_yaw',
                   'goal_error_m', 'path_m', 'peak_decel_mps2', 'wall_s', 'error', 'why', 'logs')
 _CACHE = {}     # per worker process: worlds and profiles loaded once
+#: Episodes handed to the cluster ahead of the results: this many per worker thread (at least WINDOW_MIN), the
+#: next one as each finishes, so that neither this process nor the scheduler holds a task per episode of a
+#: sweep of thousands, and a sweep that has drawn its last picture stops asking for more within that many.
+WINDOW_PER_THREAD, WINDOW_MIN = 8, 16
 
 
 def row_key(spec):
@@ -37,18 +43,23 @@ def row_key(spec):
     return json.dumps(spec.to_dict(), sort_keys=True)
 
 
-def run_row(spec_fields, logs=None):
+def run_row(spec_fields, logs=None, choice='none'):
     """One episode on a worker: the result columns (never raises; an episode that did is outcome 'error').
-    A graph episode's files go into the folder ``logs``."""
+    A graph episode's files go into the folder ``logs``. ``choice``: which episodes get a picture
+    (``report.pictures``): the picture is drawn here, from a trajectory kept only for it, and comes back as PNG
+    bytes (``picture_png``); the trajectory comes back only if the spec asks for it (``keep_trajectory``)."""
     try:
-        r = run_episode(EpisodeSpec.from_dict(spec_fields), _CACHE, logs)
+        spec = EpisodeSpec.from_dict(spec_fields)
+        r = run_episode(dataclasses.replace(spec, keep_trajectory=True) if choice != 'none' else spec, _CACHE, logs)
         row = {'outcome': r.outcome, 'mode': r.mode, 'time_s': r.time_s, 'contacts': r.contacts,
                'min_clearance_m': r.min_clearance_m, 'final_x': r.final_pose[0], 'final_y': r.final_pose[1],
                'final_yaw': r.final_pose[2], 'goal_error_m': r.goal_error_m, 'path_m': r.path_m,
                'peak_decel_mps2': r.peak_decel_mps2, 'wall_s': r.wall_s, 'error': r.error or '', 'why': r.why,
                'logs': r.logs or ''}
-        if r.trajectory is not None:
+        if spec.keep_trajectory:
             row['trajectory'] = r.trajectory
+        if pictures.wanted(choice, r.outcome, r.contacts):
+            row['picture_png'] = pictures.episode_picture(spec, r, _CACHE)
         return row
     except Exception as error:      # recorded in its row; the sweep goes on
         return dict({c: '' for c in RESULT_COLUMNS}, outcome='error', error='%s: %s' % (type(error).__name__, error))
@@ -122,6 +133,9 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
     todo = [(i, a, s) for i, (a, s) in enumerate(sweep.specs) if row_key(s) not in done]
     progress = Progress(len(sweep.specs), len(sweep.specs) - len(todo), stream)
     new_file = not existing
+    os.makedirs(os.path.join(output, sweep_report.PICTURES), exist_ok=True)
+    keep = sweep.report['max_pictures'] - len(os.listdir(os.path.join(output, sweep_report.PICTURES)))
+    choice = sweep.report['pictures'] if keep > 0 else 'none'
     with open(rows_path, 'a', newline='') as f, open(os.path.join(output, 'trajectories.jsonl'), 'a') as traj:
         writer = csv.DictWriter(f, columns, extrasaction='ignore')
         if new_file:
@@ -130,13 +144,28 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
         if todo:
             client, cluster = _client(scheduler, workers)
             logs_root = os.path.abspath(os.path.join(output, 'graphs'))
+            window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
+            pending = iter(todo)
+            futures = {}
+
+            def submit(count):
+                for i, a, s in itertools.islice(pending, count):
+                    wanted = choice if keep > 0 else 'none'
+                    future = client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted,
+                                           key='episode-%d-%s' % (i, _digest(s)), pure=False)
+                    futures[future] = (i, a, s)
+                    running.add(future)
+            running = distributed.as_completed()
             try:
-                futures = {client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i),
-                                         key='episode-%d-%s' % (i, _digest(s)), pure=False): (i, a, s)
-                           for i, a, s in todo}
-                for future in distributed.as_completed(futures):
+                submit(window)
+                for future in running:
                     i, assignment, spec = futures.pop(future)
                     result = future.result()
+                    png = result.pop('picture_png', None)
+                    if png is not None and keep > 0:
+                        with open(sweep_report.picture_path(output, i), 'wb') as picture:
+                            picture.write(png)
+                        keep -= 1
                     row = dict({k: _cell(v) for k, v in assignment.items()}, index=i, spec=row_key(spec),
                                **{c: result.get(c, '') for c in RESULT_COLUMNS})
                     writer.writerow(row)
@@ -145,6 +174,7 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
                         traj.write(json.dumps({'index': i, 'trajectory': result['trajectory']}) + '\n')
                         traj.flush()
                     progress.update(result['outcome'])
+                    submit(1)
             finally:
                 for future in list(futures):
                     future.cancel()
@@ -166,96 +196,16 @@ def _wait_graphs_down(logs_root, timeout_s=graph_keeper.GRACE_S + 5.0):
 
 
 def _digest(spec):
+    return _digest_text(row_key(spec))
+
+
+def _digest_text(text):
     import hashlib
-    return hashlib.sha1(row_key(spec).encode()).hexdigest()[:12]
+    return hashlib.sha1(text.encode()).hexdigest()[:12]
 
 
 def _cell(value):
     return json.dumps(value) if isinstance(value, (dict, list, tuple)) else value
-
-
-def summarize(rows, keys):
-    """Lines of a table: per combination of the grid's keys but ``seed``, the episodes, their outcomes,
-    contact rate, least clearance and mean time."""
-    group_keys = [k for k in keys if k != 'seed']
-    groups = {}
-    for row in rows:
-        groups.setdefault(tuple(row.get(k, '') for k in group_keys), []).append(row)
-    header = group_keys + ['episodes', 'outcomes', 'contact rate', 'min clearance', 'mean time']
-    lines = [header]
-    for values, members in sorted(groups.items(), key=lambda item: [_sortable(v) for v in item[0]]):
-        outcomes = {}
-        for row in members:
-            outcomes[row['outcome']] = outcomes.get(row['outcome'], 0) + 1
-        clear = [float(r['min_clearance_m']) for r in members if r['outcome'] != 'error']
-        times = [float(r['time_s']) for r in members if r['outcome'] != 'error']
-        contacts = [int(r['contacts']) > 0 for r in members if r['outcome'] != 'error']
-        lines.append(list(values) + [str(len(members)), ' '.join('%s %d' % kv for kv in sorted(outcomes.items())),
-                                     '%.2f' % numpy.mean(contacts) if contacts else '-',
-                                     '%.3f m' % min(clear) if clear else '-',
-                                     '%.1f s' % numpy.mean(times) if times else '-'])
-    widths = [max(len(str(line[i])) for line in lines) for i in range(len(header))]
-    return ['  '.join(str(cell).ljust(w) for cell, w in zip(line, widths)).rstrip() for line in lines]
-
-
-def _sortable(value):
-    try:
-        return (0, float(value), '')
-    except (TypeError, ValueError):
-        return (1, 0.0, str(value))
-
-
-def plot(rows, x_key, line_key, path, title):
-    """Contact rate and least clearance against ``x_key``, one line per value of ``line_key``, as a PNG."""
-    import matplotlib
-    matplotlib.use('Agg')
-    from matplotlib import pyplot
-    lines = {}
-    for row in rows:
-        if row['outcome'] == 'error':
-            continue
-        group = lines.setdefault(row.get(line_key, '') if line_key else '', {})
-        group.setdefault(float(row[x_key]), []).append(row)
-    figure, (top, bottom) = pyplot.subplots(2, 1, figsize=(7, 6.5), sharex=True)
-    for label, points in sorted(lines.items(), key=lambda item: _sortable(item[0])):
-        xs = sorted(points)
-        name = '%s = %s' % (line_key.split('.')[-1], label) if line_key else None
-        top.plot(xs, [numpy.mean([int(r['contacts']) > 0 for r in points[x]]) for x in xs], 'o-', label=name)
-        bottom.plot(xs, [min(float(r['min_clearance_m']) for r in points[x]) for x in xs], 'o-', label=name)
-    top.set_ylabel('contact rate')
-    top.set_ylim(-0.05, 1.05)
-    bottom.set_ylabel('least clearance (m, ground truth)')
-    bottom.axhline(0.0, color='grey', linewidth=0.8)
-    bottom.set_xlabel(x_key)
-    for axes in (top, bottom):
-        axes.grid(True, alpha=0.3)
-        if line_key:
-            axes.legend()
-    top.set_title(title)
-    figure.tight_layout()
-    figure.savefig(path, dpi=100)
-    pyplot.close(figure)
-
-
-def report(sweep, rows, output, stream=sys.stdout):
-    """The summary table (printed and in ``summary.txt``) and the plot, if the sweep has an x to plot."""
-    lines = summarize(rows, sweep.keys)
-    text = '\n'.join(lines) + '\n'
-    stream.write(text)
-    with open(os.path.join(output, 'summary.txt'), 'w') as f:
-        f.write(text)
-    choice = sweep.plot or _default_plot(sweep.keys, rows)
-    if choice is not None:
-        path = os.path.join(output, 'plot.png')
-        plot(rows, choice['x'], choice.get('lines'), path, sweep.name)
-        stream.write('plot: %s\n' % path)
-
-
-def _default_plot(keys, rows):
-    numeric = [k for k in keys if k != 'seed' and rows and all(_sortable(r.get(k))[0] == 0 for r in rows)]
-    if not numeric:
-        return None
-    return {'x': numeric[0], 'lines': numeric[1] if len(numeric) > 1 else None}
 
 
 def add_cluster_arguments(parser):
@@ -268,10 +218,11 @@ def add_cluster_arguments(parser):
                         'importer warnings) through to the terminal')
 
 
-def run_command(prog, make, output, args):
+def run_command(prog, make, output, args, preface=None):
     """What a sweep command does: build the sweep (``make()``), run it into ``output`` (default
-    sweeps/NAME) and report. Returns (exit status, sweep, rows); a refused sweep (2) or Ctrl-C (130)
-    is said on stderr, with no sweep or rows."""
+    sweeps/NAME) and report (``closed_loop.batch.sweep_report``; ``preface(rows)``: lines the page puts
+    first). Returns (exit status, sweep, rows); a refused sweep (2) or Ctrl-C (130) is said on stderr, with no
+    sweep or rows."""
     quiet.set_verbose(args.verbose)
     try:
         built = make()
@@ -284,14 +235,14 @@ def run_command(prog, make, output, args):
     except KeyboardInterrupt:
         print('\n%s: interrupted; the rows done are kept: run again with --resume to finish' % prog, file=sys.stderr)
         return 130, None, None
-    report(built, rows, output)
+    sweep_report.report(built, rows, output, preface=preface(rows) if preface else ())
     return 0, built, rows
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog='sweep', description=__doc__.splitlines()[0])
     parser.add_argument('spec', help='the sweep file (YAML)')
-    parser.add_argument('--output', help='directory for rows.csv, summary.txt and plot.png '
+    parser.add_argument('--output', help='directory for rows.csv, summary.txt, plot.png, report.html and pictures/ '
                         '(default: sweeps/NAME in the current directory)')
     add_cluster_arguments(parser)
     args = parser.parse_args(argv)

@@ -14,6 +14,7 @@ anything runs. Free of ROS.
       seed: {from: 0, to: 4, step: 1}
       scan_noise: [0.0, 0.01]
     plot: {x: settings.stop_distance, lines: settings.cruise_speed}     # optional
+    report: {pictures: failures, max_pictures: 100}                     # optional; these are the defaults
 
 A grid key is an EpisodeSpec field (``world``, ``robot``, ``controller``, ``seed``, ``scan_noise``,
 ``goal``, ``time_limit_s``, ...), or ``settings.NAME`` (a controller ``~parameter``), ``sim.NAME`` (a
@@ -23,6 +24,11 @@ simulator or sensor ``~parameter``), ``args.NAME`` (an arg of a graph controller
 checked as an episode would be (the controller's settings by the class its node uses, the world loaded or
 its generator's settings checked); the first problem is an error that names the file, the field and what
 was expected.
+
+``report``: which episodes get a picture (``closed_loop.batch.pictures``), drawn where the episode ran:
+``pictures: failures`` (those not as meant: collided, failed, timed out, error, or any contact), ``all`` or
+``none``; at most ``max_pictures`` of them (the first to finish), the rest on request with ``rosrun
+closed_loop episode_plot OUTPUT INDEX``.
 """
 import itertools
 import math
@@ -36,6 +42,9 @@ SPEC_FIELDS = tuple(EpisodeSpec.__dataclass_fields__)
 NAME_PATTERN = re.compile(r'^[A-Za-z0-9_-]{1,64}$')
 #: A grid may not have more combinations than this (a typo in a range should not start a million).
 MAX_EPISODES = 1000000
+#: ``report:`` when a sweep file does not say; a picture is about 40 kB and 0.2 s of a worker's time.
+REPORT_DEFAULTS = {'pictures': 'failures', 'max_pictures': 100}
+PICTURE_CHOICES = ('failures', 'all', 'none')
 
 
 class SweepError(ValueError):
@@ -101,15 +110,32 @@ def apply(base, assignment):
 
 class Sweep:
     """A checked sweep: ``name``, ``keys`` (the grid's, in file order), ``specs`` [(assignment, spec)],
-    ``plot`` ({'x': key, 'lines': key} or None)."""
+    ``plot`` ({'x': key, 'lines': key} or None), ``report`` (:data:`REPORT_DEFAULTS`' keys), ``text`` (the
+    sweep as its file says it, for the report)."""
 
-    def __init__(self, name, keys, specs, plot=None):
+    def __init__(self, name, keys, specs, plot=None, report=None, text=''):
         self.name, self.keys, self.specs, self.plot = name, keys, specs, plot
+        self.report, self.text = dict(REPORT_DEFAULTS, **(report or {})), text
 
 
-def build(name, base, grid, plot=None, source='<sweep>'):
-    """A :class:`Sweep` from a base spec (dict), a grid ({key: values}) and a plot choice, every
-    combination checked."""
+def _report(source, raw):
+    if raw is None:
+        return dict(REPORT_DEFAULTS)
+    if not isinstance(raw, dict) or not set(raw) <= set(REPORT_DEFAULTS):
+        raise SweepError('%s: report: expected {pictures: failures|all|none, max_pictures: N}, got %r' % (source, raw))
+    report = dict(REPORT_DEFAULTS, **raw)
+    if report['pictures'] not in PICTURE_CHOICES:
+        raise SweepError('%s: report.pictures: expected one of %s, got %r'
+                         % (source, ', '.join(PICTURE_CHOICES), report['pictures']))
+    count = report['max_pictures']
+    if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+        raise SweepError('%s: report.max_pictures: expected a whole number >= 0, got %r' % (source, count))
+    return report
+
+
+def build(name, base, grid, plot=None, source='<sweep>', report=None, text=None):
+    """A :class:`Sweep` from a base spec (dict), a grid ({key: values}), a plot choice and a report choice,
+    every combination checked. ``text``: the sweep as written (default: those values as YAML)."""
     if not isinstance(name, str) or not NAME_PATTERN.match(name):
         raise SweepError('%s: name: expected 1 to 64 letters, digits, _ or -, got %r' % (source, name))
     if not isinstance(base, dict):
@@ -145,21 +171,28 @@ def build(name, base, grid, plot=None, source='<sweep>'):
         except TypeError as error:
             raise SweepError('%s: %s' % (where, error))
         specs.append((assignment, spec))
-    return Sweep(name, keys, specs, plot)
+    if text is None:
+        text = yaml.safe_dump({'name': name, 'base': base, 'grid': grid, 'plot': plot, 'report': report},
+                              sort_keys=False, default_flow_style=None)
+    return Sweep(name, keys, specs, plot, _report(source, report), text)
 
 
 def load(path):
     """The :class:`Sweep` of the file at ``path``."""
     try:
         with open(path) as f:
-            data = yaml.safe_load(f)
+            text = f.read()
+        data = yaml.safe_load(text)
     except OSError as error:
         raise SweepError('%s: cannot be read (%s)' % (path, error.strerror or error))
+    except UnicodeDecodeError:
+        raise SweepError('%s: not a sweep file (not UTF-8 text)' % path) from None
     except yaml.YAMLError as error:
         raise SweepError('%s: not valid YAML (%s)' % (path, error))
     if not isinstance(data, dict):
-        raise SweepError('%s: expected a mapping with name, base, grid (and plot), got %r' % (path, data))
-    unknown = sorted(set(data) - {'name', 'base', 'grid', 'plot'})
+        raise SweepError('%s: expected a mapping with name, base, grid (and plot, report), got %r' % (path, data))
+    unknown = sorted(set(data) - {'name', 'base', 'grid', 'plot', 'report'})
     if unknown:
-        raise SweepError('%s: %s: expected only name, base, grid and plot' % (path, unknown[0]))
-    return build(data.get('name'), data.get('base', {}), data.get('grid'), data.get('plot'), path)
+        raise SweepError('%s: %s: expected only name, base, grid, plot and report' % (path, unknown[0]))
+    return build(data.get('name'), data.get('base', {}), data.get('grid'), data.get('plot'), path,
+                 data.get('report'), text)

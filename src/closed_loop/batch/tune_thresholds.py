@@ -10,7 +10,8 @@ noise levels and seeds as given), each with the slow distance tied to it (below)
     0.5 m and 1.0 m at 0.5 m/s keep exactly that gap), with which those episodes ran.
 
 It prints that rule, the recommendation per speed and the evidence (per stop distance: episodes, contacts,
-least clearance), and writes the rows, the summary and the plot as a sweep does.
+least clearance), and writes the rows, the summary, the plot, the pictures and the page as a sweep does,
+the page with the rule and the recommendation at the top.
 """
 import argparse
 import sys
@@ -62,6 +63,24 @@ def recommend(rows, margin):
     return result
 
 
+def findings(rows, margin, evidence=False):
+    """Lines: the rule, then the recommendation per cruise speed (with ``evidence``, per stop distance tried:
+    episodes, contacts, least clearance)."""
+    lines = ['rule: ' + RULE % (margin, SLOW_LEAD_S)]
+    for speed, (stop, tried) in sorted(recommend(rows, margin).items()):
+        if stop is None:
+            lines.append('cruise %.2f m/s: no stop distance tried was safe in every episode; try larger ones' % speed)
+        else:
+            lines.append('cruise %.2f m/s: stop_distance %.2f m, slow_distance %.2f m'
+                         % (speed, stop, stop + SLOW_LEAD_S * speed))
+        if evidence:
+            lines += ['    stop %.2f m: %d episodes, %d with contact, least clearance %.3f m%s%s'
+                      % (s, n, contacts, clearance, ', %d failed to run' % errors if errors else '',
+                         '  <- recommended' if s == stop else '')
+                      for s, (n, contacts, clearance, errors) in tried.items()]
+    return lines
+
+
 def _floats(text):
     try:
         values = [float(v) for v in text.split(',') if v.strip()]
@@ -88,21 +107,11 @@ def main(argv=None):
     args = parser.parse_args(argv)
     status, _, rows = sweep.run_command('tune_thresholds', lambda: build(
         args.speeds, args.stops, [w for w in args.worlds.split(',') if w], list(range(args.seeds)), args.noise,
-        args.time_limit), args.output, args)
+        args.time_limit), args.output, args, preface=lambda rows: findings(rows, args.margin))
     if status:
         return status
     print()
-    print('rule: ' + RULE % (args.margin, SLOW_LEAD_S))
-    for speed, (stop, evidence) in sorted(recommend(rows, args.margin).items()):
-        if stop is None:
-            print('cruise %.2f m/s: no stop distance tried was safe in every episode; try larger ones' % speed)
-        else:
-            print('cruise %.2f m/s: stop_distance %.2f m, slow_distance %.2f m' % (speed, stop,
-                                                                              stop + SLOW_LEAD_S * speed))
-        for s, (n, contacts, clearance, errors) in evidence.items():
-            print('    stop %.2f m: %d episodes, %d with contact, least clearance %.3f m%s%s'
-                  % (s, n, contacts, clearance, ', %d failed to run' % errors if errors else '',
-                     '  <- recommended' if s == stop else ''))
+    print('\n'.join(findings(rows, args.margin, evidence=True)))
     return 0
 
 

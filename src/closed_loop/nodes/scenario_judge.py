@@ -35,14 +35,15 @@ class ScenarioJudge:
     Parameters: :class:`closed_loop.batch.judge.JudgeSettings` and :class:`closed_loop.batch.judge.StartSettings`
     (with ``~unpause``, it starts the paused simulator once a node publishes ``cmd_vel``); ``~goal_x``,
     ``~goal_y`` (m, in the world frame: both or neither); ``~verdict_file`` (a path: the verdict's JSON is
-    also written there, whole or not at all).
+    also written there, whole or not at all); ``~keep_track`` (bool: the verdict file also holds the track, a
+    row per judged instant, and the contacts, for a picture of the scenario: ``closed_loop.batch.pictures``).
     """
 
     def __init__(self):
         self.settings = load_settings(JudgeSettings)
         self.goal = goal_param()
         self.verdict_file = rospy.get_param('~verdict_file', '')
-        self.judge = Judge(self.settings, self.goal)
+        self.judge = Judge(self.settings, self.goal, keep_track=bool(rospy.get_param('~keep_track', False)))
         self.lock = threading.Lock()
         self.command = None          # (v, w, stamp s)
         self.contact_count = 0
@@ -130,7 +131,8 @@ class ScenarioJudge:
         verdict = self.judge.verdict(t, pose)
         text = json.dumps(verdict.to_dict())
         if self.verdict_file:
-            write_whole(self.verdict_file, text)
+            whole = dict(verdict.to_dict(), **self.judge.track_dict()) if self.judge.track is not None else None
+            write_whole(self.verdict_file, json.dumps(whole) if whole else text)
         self.verdict_pub.publish(String(data=text))
         (rospy.loginfo if verdict.outcome in ('reached', 'stopped') else rospy.logwarn)('verdict: %s', verdict.why)
 

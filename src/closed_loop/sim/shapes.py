@@ -2,8 +2,8 @@
 
 An obstacle is a vertical prism: a box (walls are boxes) or a cylinder. :data:`SHAPES` maps the
 obstacle's ``shape`` to a class that gives, for one obstacle at its time-0 position, the signed distance
-from a point to its footprint, whether a robot's rectangle overlaps it, and its pybullet collision and
-visual shapes. World checks, the demo's clearance report and the simulator all go through this table, so
+from a point to its footprint, its outline (for pictures), whether a robot's rectangle overlaps it, and its
+pybullet collision and visual shapes. World checks, the demo's clearance report and the simulator all go through this table, so
 a new shape is one class here. Each also casts planar rays at a group of its obstacles
 (``ray_distances``), for the LIDAR's planar ray caster (``closed_loop.sim.planar_rays``).
 """
@@ -46,6 +46,12 @@ class Box:
         qx = abs(c * dx + s * dy) - 0.5 * obstacle.size[0]
         qy = abs(-s * dx + c * dy) - 0.5 * obstacle.size[1]
         return math.hypot(max(qx, 0.0), max(qy, 0.0)) + min(max(qx, qy), 0.0)
+
+    @staticmethod
+    def outline(obstacle, x_m, y_m):
+        """Its footprint's corners, centred at (``x_m``, ``y_m``)."""
+        hx, hy = 0.5 * obstacle.size[0], 0.5 * obstacle.size[1]
+        return _corners(x_m, y_m, obstacle.yaw, -hx, hx, -hy, hy)
 
     @staticmethod
     def overlaps_robot(obstacle, pose, rect):
@@ -94,6 +100,13 @@ class Cylinder:
         return math.hypot(x_m - obstacle.position[0], y_m - obstacle.position[1]) - obstacle.radius
 
     @staticmethod
+    def outline(obstacle, x_m, y_m, sides=40):
+        """Its footprint as a polygon of ``sides`` corners, centred at (``x_m``, ``y_m``)."""
+        r = obstacle.radius
+        return [(x_m + r * math.cos(2.0 * math.pi * i / sides), y_m + r * math.sin(2.0 * math.pi * i / sides))
+                for i in range(sides)]
+
+    @staticmethod
     def overlaps_robot(obstacle, pose, rect):
         x_min, x_max, y_min, y_max = rect
         c, s = math.cos(pose.yaw), math.sin(pose.yaw)
@@ -137,3 +150,11 @@ def bounding_radius(obstacle):
 def distance(obstacle, x_m, y_m):
     """Signed distance (m) from the point to the obstacle's footprint: negative inside."""
     return SHAPES[obstacle.shape].distance(obstacle, x_m, y_m)
+
+
+def outline(obstacle, x_m=None, y_m=None):
+    """The obstacle's footprint as polygon corners [(x, y), ...] (m), at its time-0 position or centred at
+    (``x_m``, ``y_m``) (a moving obstacle's place at some time)."""
+    x_m = obstacle.position[0] if x_m is None else x_m
+    y_m = obstacle.position[1] if y_m is None else y_m
+    return SHAPES[obstacle.shape].outline(obstacle, x_m, y_m)

@@ -1,0 +1,97 @@
+#!/usr/bin/env python3
+"""Seeing failures, and what it costs: one episode's picture (a navigator in a generated cluttered world), a
+sweep's report.html for 10,000 rows, and sweeps of 1,000 and 10,000 episodes that all fail (0.2 s in an empty
+world: every one times out) on a local cluster of 2 workers with the default report (100 pictures): wall
+time, pictures written, trajectories sent back, and the sweep process's own peak memory.
+
+Run: ``python3 test/bench/bench_report.py`` inside ``source env.sh`` (``make bench`` does that).
+Figures, not pass/fail: the exit status is non-zero only when something could not run.
+"""
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+import types
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
+sys.path.insert(0, os.path.join(ROOT, 'src'))
+
+from closed_loop.batch import pictures, report_page  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
+
+LARGE = textwrap.dedent("""\
+    import io, json, os, resource, sys, time
+    from closed_loop.batch import sweep, sweep_file
+    if __name__ == '__main__':
+        built = sweep_file.build('large', {'world': 'empty', 'time_limit_s': 0.2},
+                                 {'seed': {'from': 0, 'to': int(sys.argv[1]) - 1, 'step': 1}})
+        started = time.monotonic()
+        rows = sweep.run(built, sys.argv[2], workers=2, stream=io.StringIO())
+        print(json.dumps({'rows': len(rows), 'wall_s': time.monotonic() - started,
+                          'pictures': len(os.listdir(os.path.join(sys.argv[2], 'pictures'))),
+                          'trajectory_bytes': os.path.getsize(os.path.join(sys.argv[2], 'trajectories.jsonl')),
+                          'peak_mb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
+    """)
+
+
+def picture_cost():
+    spec = EpisodeSpec(world={'generator': {'seed': 5, 'fill_ratio': 0.5}}, robot='jackal', controller='avoid_obstacles',
+                       time_limit_s=40.0, keep_trajectory=True)
+    result = run_episode(spec)
+    cache, times, size = {}, [], 0
+    for _ in range(10):
+        started = time.process_time()
+        size = len(pictures.episode_picture(spec, result, cache))
+        times.append(time.process_time() - started)
+    print('picture: %s in a generated world, %d track rows: %.0f ms CPU (median of 10), %.0f kB'
+          % (result.outcome, len(result.trajectory), 1000 * statistics.median(times), size / 1024.0))
+
+
+def page_cost():
+    with tempfile.TemporaryDirectory() as out:
+        os.makedirs(os.path.join(out, 'pictures'))
+        rows = [{'index': str(i), 'spec': json.dumps({'seed': i}), 'seed': str(i), 'outcome': 'timed_out' if i % 3 else
+                 'stopped', 'contacts': '0', 'why': 'timed_out at (0.00, 0.00) after 0.2 s'} for i in range(10000)]
+        for i in range(1, 300, 3):
+            open(os.path.join(out, 'pictures', 'episode-%05d.png' % i), 'wb').close()
+        sweep = types.SimpleNamespace(name='page', keys=['seed'], report={'pictures': 'failures'}, text='name: page')
+        started = time.process_time()
+        report_page.write(os.path.join(out, 'report.html'), sweep, rows, ['episodes'], [['10000']], None,
+                          lambda i: os.path.join(out, 'pictures', 'episode-%05d.png' % int(i)))
+        print('report.html of 10,000 rows (6,667 not as meant, 1,000 listed, 100 pictures): %.0f ms CPU, %.0f kB'
+              % (1000 * (time.process_time() - started), os.path.getsize(os.path.join(out, 'report.html')) / 1024.0))
+
+
+def large(count):
+    with tempfile.TemporaryDirectory() as out:
+        script = os.path.join(out, 'large.py')
+        with open(script, 'w') as f:
+            f.write(LARGE)
+        done = subprocess.run([sys.executable, script, str(count), os.path.join(out, 'sweep')], stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, universal_newlines=True, timeout=560)
+        if done.returncode != 0:
+            print(done.stdout[-3000:])
+            raise SystemExit(1)
+        figures = json.loads(done.stdout.strip().splitlines()[-1])
+    print('sweep of %d failing episodes, 2 workers: %.0f s (%.0f a minute), %d pictures, %d bytes of trajectories '
+          'sent back, sweep process peak %.0f MB' % (figures['rows'], figures['wall_s'],
+                                                     60.0 * figures['rows'] / figures['wall_s'], figures['pictures'],
+                                                     figures['trajectory_bytes'], figures['peak_mb']))
+    return figures
+
+
+def main():
+    picture_cost()
+    page_cost()
+    small, big = large(1000), large(10000)
+    print('peak memory of the sweep process: %.0f MB at 1,000 episodes, %.0f MB at 10,000 (%.2fx for 10x the '
+          'episodes)' % (small['peak_mb'], big['peak_mb'], big['peak_mb'] / small['peak_mb']))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
