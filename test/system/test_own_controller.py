@@ -5,6 +5,7 @@ package's rostests, and by a sweep of graph episodes; and the rows a sweep write
 wrong."""
 import concurrent.futures
 import glob
+import json
 import math
 import os
 import subprocess
@@ -68,6 +69,11 @@ def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fix
     assert reached['outcome'] == 'reached' and float(reached['goal_error_m']) < 0.4, reached
     behind = by_case[('goal_seeker', '[5.0, 0.0]')]
     assert behind['outcome'] == 'timed_out' and behind['contacts'] == '0' and float(behind['final_x']) < 2.9, behind
+    # Only the episode not as meant is drawn, from the track its judge kept in the graph.
+    assert os.listdir(tmp_path / 'out' / 'pictures') == ['episode-%05d.png' % int(behind['index'])]
+    with open(os.path.join(behind['logs'], 'verdict.json')) as f:
+        track = json.load(f)['trajectory']
+    assert len(track) > 100 and abs(track[-1][1] - float(behind['final_x'])) < 0.05, track[-1]
     for row in rows.values():
         assert not row['error'] and row['why'].startswith(row['outcome']), row
         assert os.path.isfile(os.path.join(row['logs'], 'verdict.json')), row['logs']
