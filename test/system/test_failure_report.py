@@ -125,7 +125,7 @@ def test_episode_bag_writes_a_clean_bag_that_replays_into_subscribers(swept, tmp
     try:
         assert listener.stdout.readline().strip() == 'ready'
         time.sleep(1.0)
-        play = subprocess.run(['rosbag', 'play', '-q', '-r', '5', '-d', '1', str(bag_path)], env=env,
+        play = subprocess.run(['rosbag', 'play', '-q', '-r', '5', '-d', '1', '--queue', '100000', str(bag_path)], env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
         assert play.returncode == 0, play.stdout
         got = json.loads(listener.communicate(timeout=150)[0].splitlines()[-1])
@@ -177,16 +177,16 @@ LARGE = textwrap.dedent("""\
 
 
 def test_a_large_sweep_of_failures_draws_only_its_first_pictures_and_holds_no_trajectories(tmp_path):
-    """600 episodes that all time out (0.2 s in an empty world): the default report keeps 100 pictures, no
+    """250 episodes that all time out (0.2 s in an empty world): the default report keeps 100 pictures, no
     trajectory comes back, and the sweep's own process stays small (bench_report runs 10,000)."""
     script = tmp_path / 'large.py'
     script.write_text(LARGE)
-    done = subprocess.run([sys.executable, str(script), '600', str(tmp_path / 'out')], stdout=subprocess.PIPE,
+    done = subprocess.run([sys.executable, str(script), '250', str(tmp_path / 'out')], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=400)
     assert done.returncode == 0, done.stdout[-3000:]
     figures = json.loads(done.stdout.strip().splitlines()[-1])
     rows = rows_of(tmp_path / 'out')
-    assert figures['rows'] == len(rows) == 600 and {r['outcome'] for r in rows.values()} == {'timed_out'}
+    assert figures['rows'] == len(rows) == 250 and {r['outcome'] for r in rows.values()} == {'timed_out'}
     assert len(os.listdir(tmp_path / 'out' / 'pictures')) == 100
     assert (tmp_path / 'out' / 'trajectories.jsonl').read_text() == ''
     assert figures['peak_mb'] < 250, figures
