@@ -84,7 +84,7 @@ ALONE = ('sim_wall', 'loop_wall', 'loop_fast', 'kill_controller', 'kill_sim', 'r
 SIDE_BY_SIDE = 3
 #: System test files that run sweeps of graph episodes (two graphs at once each): they start first, and never
 #: two of them at the same time, so that the machine is not asked for six graphs at once.
-GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreement')
+GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreement', 'test_failure_report')
 
 
 def run_rostest_file(path, results_dir):
