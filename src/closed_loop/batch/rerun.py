@@ -81,13 +81,19 @@ def report_differences(index, found, stream=sys.stderr):
     return True
 
 
-def plot_main(argv=None):
-    """``episode_plot OUTPUT INDEX [--out FILE.png] [--colour-by mode|speed]``."""
-    parser = argparse.ArgumentParser(prog='episode_plot', description='Draw a row of a finished sweep again, '
-                                     'by re-running its spec: a top-down picture of the episode (PNG).')
+def row_parser(prog, description, out_help):
+    """The command line of a tool that takes a row of a finished sweep: ``OUTPUT INDEX [--out FILE]``."""
+    parser = argparse.ArgumentParser(prog=prog, description=description)
     parser.add_argument('output', help="the sweep's folder (its --output, with rows.csv)")
     parser.add_argument('index', type=int, help="the row's index (rows.csv's index column)")
-    parser.add_argument('--out', help='the PNG to write (default: OUTPUT/pictures/episode-INDEX.png)')
+    parser.add_argument('--out', help=out_help)
+    return parser
+
+
+def plot_main(argv=None):
+    """``episode_plot OUTPUT INDEX [--out FILE.png] [--colour-by mode|speed]``."""
+    parser = row_parser('episode_plot', 'Draw a row of a finished sweep again, by re-running its spec: a top-down '
+                        'picture of the episode (PNG).', 'the PNG to write (default: OUTPUT/pictures/episode-INDEX.png)')
     parser.add_argument('--colour-by', choices=('mode', 'speed'), help="the path's colour (default: the "
                         "controller's mode, where it has one)")
     args = parser.parse_args(argv)

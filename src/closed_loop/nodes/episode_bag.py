@@ -14,7 +14,6 @@ re-run reproduced the row (outcome, contacts, final pose to the bit) and says so
 Replay it in rviz: ``roslaunch closed_loop display.launch sim_time:=true robot:=ROBOT
 mode_topic:=/NAME/mode`` and ``rosbag play FILE.bag`` (the bag has its own /clock).
 """
-import argparse
 import os
 import sys
 
@@ -141,12 +140,9 @@ class BagTap(Tap):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog='episode_bag', description='A row of a finished sweep as a bag: its spec '
-                                     're-run, with what the simulator and the controller would have published.')
-    parser.add_argument('output', help="the sweep's folder (its --output, with rows.csv)")
-    parser.add_argument('index', type=int, help="the row's index (rows.csv's index column)")
-    parser.add_argument('--out', help='the bag to write (default: OUTPUT/bags/episode-INDEX.bag)')
-    args = parser.parse_args(argv)
+    args = rerun.row_parser('episode_bag', 'A row of a finished sweep as a bag: its spec re-run, with what the '
+                            'simulator and the controller would have published.',
+                            'the bag to write (default: OUTPUT/bags/episode-INDEX.bag)').parse_args(argv)
     out = args.out or os.path.join(args.output, 'bags', 'episode-%05d.bag' % args.index)
     try:
         row, spec = rerun.find_row(args.output, args.index)
