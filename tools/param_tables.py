@@ -39,6 +39,7 @@ def node_settings():
         'cmd_vel_marker': (markers.MarkerSettings,),
         'vision_node': (vision.VisionSettings,),
         'record_bag': (recording.RecordSettings,),
+        'scenario_recorder': (recording.ScenarioRecordSettings,),
         'scenario_judge': (judge.JudgeSettings, judge.StartSettings),
     }
     for name, cls in controller_classes().items():

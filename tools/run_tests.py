@@ -20,6 +20,7 @@ import functools
 import glob
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import threading
@@ -220,6 +221,9 @@ def run_side_by_side(jobs, count):
 
 def main():
     netenv.apply_loopback_defaults(os.environ)
+    # Started from a background job (`make test &`), SIGINT is ignored and every process started here would
+    # inherit that: the tests that stop a node, a launch or a sweep as Ctrl-C does need it back.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--unit-only', action='store_true')
     parser.add_argument('--rostest-only', action='store_true')

@@ -54,6 +54,19 @@ class RecordSettings:
             raise SettingsError('~bag_dir: expected a folder path, got %r' % (self.bag_dir,))
 
 
+@dataclasses.dataclass
+class ScenarioRecordSettings:
+    """scenario_recorder's ``~parameters``: one bag of a whole scenario, every topic from simulated t = 0."""
+    bag: str = param('', '', 'the bag file to write (its folder is created; ~ is the home folder); it is '
+                     'written as BAG.part and renamed when the recorder stops')
+    min_free_mb: int = param(64, 'MiB', "refuse to start, and stop recording, when the bag folder's disk has "
+                             'less free space than this', minimum=1)
+
+    def check_together(self):
+        if not self.bag.endswith('.bag') or '\0' in self.bag:
+            raise SettingsError('~bag: expected a path to a .bag file, got %r' % (self.bag[:200],))
+
+
 def bag_folder(settings):
     """The bag folder as an absolute path (``~`` expanded)."""
     return os.path.abspath(os.path.expanduser(settings.bag_dir))
@@ -94,11 +107,15 @@ def room_problem(folder, min_free_mb):
 
 def bag_dir_problem(settings):
     """Why bags cannot be recorded in the bag folder (it is created if missing), or None when they can."""
-    folder = bag_folder(settings)
+    return folder_problem(bag_folder(settings), settings.min_free_mb)
+
+
+def folder_problem(folder, min_free_mb):
+    """Why a bag cannot be written in ``folder`` (created if missing), or None when it can."""
     try:
         os.makedirs(folder, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=folder, prefix='.closed_loop-probe-'):
             pass
     except OSError as error:
         return 'cannot write bags in %s: %s' % (folder, error.strerror or error)
-    return room_problem(folder, settings.min_free_mb)
+    return room_problem(folder, min_free_mb)

@@ -173,23 +173,25 @@ LARGE = textwrap.dedent("""\
     from closed_loop.batch import sweep, sweep_file
     if __name__ == '__main__':
         built = sweep_file.build('large', {'world': 'empty', 'time_limit_s': 0.2},
-                                 {'seed': {'from': 0, 'to': int(sys.argv[1]) - 1, 'step': 1}})
+                                 {'seed': {'from': 0, 'to': int(sys.argv[1]) - 1, 'step': 1}},
+                                 report={'max_pictures': int(sys.argv[3])})
         rows = sweep.run(built, sys.argv[2], workers=2, stream=io.StringIO())
         print(json.dumps({'rows': len(rows), 'peak_mb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
     """)
 
 
 def test_a_large_sweep_of_failures_draws_only_its_first_pictures_and_holds_no_trajectories(tmp_path):
-    """250 episodes that all time out (0.2 s in an empty world): the default report keeps 100 pictures, no
-    trajectory comes back, and the sweep's own process stays small (bench_report runs 10,000)."""
+    """200 episodes that all time out (0.2 s in an empty world): the report keeps its first 25 pictures
+    (max_pictures; 100 by default), no trajectory comes back, and the sweep's own process stays small
+    (bench_report runs 10,000 with the default)."""
     script = tmp_path / 'large.py'
     script.write_text(LARGE)
-    done = subprocess.run([sys.executable, str(script), '250', str(tmp_path / 'out')], stdout=subprocess.PIPE,
+    done = subprocess.run([sys.executable, str(script), '200', str(tmp_path / 'out'), '25'], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=400)
     assert done.returncode == 0, done.stdout[-3000:]
     figures = json.loads(done.stdout.strip().splitlines()[-1])
     rows = rows_of(tmp_path / 'out')
-    assert figures['rows'] == len(rows) == 250 and {r['outcome'] for r in rows.values()} == {'timed_out'}
-    assert len(os.listdir(tmp_path / 'out' / 'pictures')) == 100
+    assert figures['rows'] == len(rows) == 200 and {r['outcome'] for r in rows.values()} == {'timed_out'}
+    assert len(os.listdir(tmp_path / 'out' / 'pictures')) == 25
     assert (tmp_path / 'out' / 'trajectories.jsonl').read_text() == ''
     assert figures['peak_mb'] < 250, figures

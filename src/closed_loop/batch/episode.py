@@ -235,16 +235,19 @@ def prepare(spec, cache=None):
     return Prepared(profile, cls, world, settings, sim_params, goal, goal_world, extra, graph)
 
 
-def run_episode(spec, cache=None, logs=None, tap=None):
+def run_episode(spec, cache=None, logs=None, tap=None, bag=None):
     """Run ``spec`` (an :class:`EpisodeSpec`): its controller's core in lockstep with the simulation
     (``closed_loop.batch.lockstep``, shown to ``tap`` if given), or a graph (``closed_loop.batch.graph_episode``,
-    its folder under ``logs``, a new folder if None). An unusable spec raises :class:`EpisodeError`."""
+    its folder under ``logs``, a new folder if None; ``bag``: a .bag file the graph is recorded into). An
+    unusable spec raises :class:`EpisodeError`."""
     prepared = prepare(spec, cache)
     if prepared.graph is not None:
         if tap is not None:
             raise EpisodeError('controller: a graph episode runs in its own processes; it has no loop to tap')
         from closed_loop.batch.graph_episode import run_graph
-        return run_graph(spec, prepared, logs)
+        return run_graph(spec, prepared, logs, bag)
+    if bag is not None:
+        raise EpisodeError('bag: an in-process episode is written as a bag through its loop (episode_bag)')
     from closed_loop.batch.lockstep import run_in_process
     return run_in_process(spec, prepared, tap)
 

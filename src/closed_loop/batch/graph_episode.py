@@ -96,9 +96,9 @@ def _value(value):
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
-def launch_text(spec, prepared, folder):
-    """The launch file of the episode's graph: scenario.launch with the episode's world, robot, goal and judge,
-    the simulator's parameters, and the controller."""
+def launch_text(spec, prepared, folder, bag=None):
+    """The launch file of the episode's graph: scenario.launch with the episode's world, robot, goal and judge
+    (and its recorder, writing ``bag``, if given), the simulator's parameters, and the controller."""
     p, c = prepared, prepared.graph
     world = spec.world
     if isinstance(world, dict):                                     # a generated world: a file of its own
@@ -116,6 +116,8 @@ def launch_text(spec, prepared, folder):
             'verdict_file': os.path.join(folder, 'verdict.json'), 'keep_track': spec.keep_trajectory}
     if p.goal_world is not None:
         args['goal_x'], args['goal_y'] = p.goal_world
+    if bag is not None:
+        args['bag'] = os.path.abspath(bag)
     node = c.get('node')
     if c.get('mode_topic') or node:
         args['mode_topic'] = c.get('mode_topic') or '/%s/mode' % node
@@ -180,10 +182,11 @@ def _node_log(folder, name):
         os.path.join(folder, 'graph.log'))
 
 
-def run_graph(spec, prepared, folder=None):
+def run_graph(spec, prepared, folder=None, bag=None):
     """Run the graph episode ``spec`` (resolved as ``prepared``) with its files in a new ``folder`` (None: a
-    temporary one). An earlier attempt's folder of that name (a worker that died, a resumed sweep) is kept
-    beside it as ``FOLDER.attempt-K``."""
+    temporary one), recorded into ``bag`` if given (scenario.launch's recorder: every topic from t = 0). An
+    earlier attempt's folder of that name (a worker that died, a resumed sweep) is kept beside it as
+    ``FOLDER.attempt-K``."""
     started = time.monotonic()
     with _ONE_GRAPH:
         if folder is None:
@@ -193,7 +196,7 @@ def run_graph(spec, prepared, folder=None):
             os.makedirs(folder)
         launch_file = os.path.join(folder, 'episode.launch')
         with open(launch_file, 'w') as f:
-            f.write(launch_text(spec, prepared, folder))
+            f.write(launch_text(spec, prepared, folder, bag))
         mark = os.path.abspath(folder) + os.sep
         env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
                    **{graph_keeper.MARK: mark})

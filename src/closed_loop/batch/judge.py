@@ -21,7 +21,8 @@ import dataclasses
 import math
 from typing import Optional
 
-from closed_loop.settings import param
+from closed_loop.recording import TOPIC_NAME
+from closed_loop.settings import SettingsError, param
 
 OUTCOMES = ('reached', 'stopped', 'failed', 'timed_out', 'collided', 'error')
 REACHED, FAILED = 'REACHED', 'FAILED'
@@ -57,6 +58,13 @@ class StartSettings:
                                  'the simulation anyway (the verdict then says no command came)', minimum=0.0)
     settle: float = param(0.2, 's', "wall time between the controller's cmd_vel appearing and the start, for "
                           'its subscriptions to connect', minimum=0.0)
+    wait_for: str = param('', '', 'more topics, separated by spaces, that must have a publisher before the start '
+                          "(scenario.launch's bag: the scenario recorder's ~recording, once it is connected)")
+
+    def check_together(self):
+        for topic in self.wait_for.split():
+            if not TOPIC_NAME.match(topic):
+                raise SettingsError('~wait_for: expected topic names separated by spaces, got %r' % (topic[:200],))
 
 
 @dataclasses.dataclass

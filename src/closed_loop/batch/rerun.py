@@ -38,14 +38,15 @@ def find_row(output, index):
     raise RerunError('%s: no row with index %s' % (path, index))
 
 
-def rerun(output, index, tap=None, logs=None):
+def rerun(output, index, tap=None, logs=None, bag=None):
     """(row, spec, result, differences): episode ``index`` of the sweep in ``output`` run again, its trajectory
-    kept, shown to ``tap`` (``closed_loop.batch.lockstep.Tap``) if given."""
+    kept, shown to ``tap`` (``closed_loop.batch.lockstep.Tap``) if given, or for a graph episode recorded into
+    ``bag`` if given."""
     row, spec = find_row(output, index)
     if row['outcome'] == 'error' and not row.get('logs'):
         raise RerunError('row %s could not run in the sweep: %s' % (index, row.get('error') or row.get('why')))
     try:
-        result = run_episode(dataclasses.replace(spec, keep_trajectory=True), {}, logs, tap)
+        result = run_episode(dataclasses.replace(spec, keep_trajectory=True), {}, logs, tap, bag)
     except EpisodeError as error:
         raise RerunError('row %s: %s' % (index, error))
     return row, spec, result, differences(row, result, graph=isinstance(spec.controller, dict))

@@ -11,6 +11,10 @@ schedule (``closed_loop.sim.scheduler``), from the readings the controller got (
 LIDAR or the contacts a second time: their noise and state would change the run). It then checks that the
 re-run reproduced the row (outcome, contacts, final pose to the bit) and says so.
 
+A graph episode's row (a controller of yours, in its own processes) is re-run as a graph with
+``scenario.launch``'s recorder (``closed_loop.nodes.scenario_recorder``): every topic of the graph, from
+simulated t = 0, at receipt; its re-run is held to the outcome and a final position within 3 cm.
+
 Replay it in rviz: ``roslaunch closed_loop display.launch sim_time:=true robot:=ROBOT
 mode_topic:=/NAME/mode`` and ``rosbag play FILE.bag`` (the bag has its own /clock).
 """
@@ -143,25 +147,41 @@ def main(argv=None):
     args = rerun.row_parser('episode_bag', 'A row of a finished sweep as a bag: its spec re-run, with what the '
                             'simulator and the controller would have published.',
                             'the bag to write (default: OUTPUT/bags/episode-INDEX.bag)').parse_args(argv)
-    out = args.out or os.path.join(args.output, 'bags', 'episode-%05d.bag' % args.index)
+    out = os.path.abspath(args.out or os.path.join(args.output, 'bags', 'episode-%05d.bag' % args.index))
     try:
         row, spec = rerun.find_row(args.output, args.index)
+        os.makedirs(os.path.dirname(out), exist_ok=True)
         if isinstance(spec.controller, dict):
-            raise rerun.RerunError('row %d is a graph episode (its controller runs in its own processes): record '
-                                   'its graph with rosbag record (docs/own_controller.md)' % args.index)
-        os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
-        with rosbag.Bag(out + '.part', 'w') as bag:
-            tap = BagTap(bag, spec.controller, load_profile(spec.robot).urdf)
-            row, spec, result, found = rerun.rerun(args.output, args.index, tap)
-        os.replace(out + '.part', out)
-    except (rerun.RerunError, ProfileError, OSError) as error:
+            counts, (row, spec, result, found) = _graph_bag(args, out)
+        else:
+            with rosbag.Bag(out + '.part', 'w') as bag:
+                tap = BagTap(bag, spec.controller, load_profile(spec.robot).urdf)
+                row, spec, result, found = rerun.rerun(args.output, args.index, tap)
+            os.replace(out + '.part', out)
+            counts = tap.counts
+    except (rerun.RerunError, ProfileError, OSError, rosbag.ROSBagException) as error:
         print('episode_bag: %s' % error, file=sys.stderr)
         return 2
     finally:
         if os.path.exists(out + '.part'):
             os.remove(out + '.part')
     print('episode %d: %s\nbag: %s (%d messages on %d topics)' % (args.index, result.why, out,
-                                                                sum(tap.counts.values()), len(tap.counts)))
-    for topic, count in sorted(tap.counts.items()):
+                                                                sum(counts.values()), len(counts)))
+    for topic, count in sorted(counts.items()):
         print('  %-34s %6d' % (topic, count))
     return 0 if rerun.report_differences(args.index, found) else 1
+
+
+def _graph_bag(args, out):
+    """A graph episode's row re-run with its graph recorded (scenario.launch's recorder, every topic from
+    t = 0) into ``out``: ({topic: messages}, rerun's answer)."""
+    if os.path.exists(out):
+        os.remove(out)
+    answer = rerun.rerun(args.output, args.index, bag=out)
+    result = answer[2]
+    if not os.path.isfile(out):
+        raise rerun.RerunError('row %d: the re-run graph wrote no bag (%s); its logs: %s'
+                               % (args.index, result.why, result.logs))
+    with rosbag.Bag(out) as bag:
+        topics = bag.get_type_and_topic_info().topics
+    return {topic: info.message_count for topic, info in topics.items()}, answer

@@ -63,19 +63,15 @@ class ScenarioJudge:
                       self.settings.time_limit)
 
     def _start_when_ready(self):
-        """Unpause the simulator once some node publishes cmd_vel (and its subscriptions have had ``settle``
-        to connect), or after ``ready_timeout`` anyway."""
+        """Unpause the simulator once some node publishes cmd_vel and each of the ``wait_for`` topics has a
+        publisher (and their subscriptions have had ``settle`` to connect), or after ``ready_timeout`` anyway."""
         topic, master = rospy.resolve_name('cmd_vel'), rosgraph.Master(rospy.get_name())
         deadline = time.monotonic() + self.start.ready_timeout
-        publishers = []
-        while not rospy.is_shutdown() and time.monotonic() < deadline:
-            try:
-                publishers = dict(master.getSystemState()[0]).get(topic, [])
-            except (rosgraph.MasterException, OSError):
-                publishers = []
-            if publishers:
-                break
-            time.sleep(0.05)
+        publishers = self._wait_for_publisher(master, topic, deadline)
+        for other in self.start.wait_for.split():
+            if publishers and not self._wait_for_publisher(master, rospy.resolve_name(other), deadline):
+                rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', other,
+                              self.start.ready_timeout)
         if publishers:
             time.sleep(self.start.settle)
             rospy.loginfo('the controller is up (%s publishes %s): starting the simulation', publishers[0], topic)
@@ -87,6 +83,19 @@ class ScenarioJudge:
             rospy.ServiceProxy(self.start.unpause, Empty)()
         except (rospy.ROSException, rospy.ServiceException) as error:
             rospy.logerr('cannot start the simulation (%s): %s', self.start.unpause, error)
+
+    @staticmethod
+    def _wait_for_publisher(master, topic, deadline):
+        """The nodes that publish ``topic``, once there is one, or [] at ``deadline`` (wall clock)."""
+        while not rospy.is_shutdown() and time.monotonic() < deadline:
+            try:
+                publishers = dict(master.getSystemState()[0]).get(topic, [])
+            except (rosgraph.MasterException, OSError):
+                publishers = []
+            if publishers:
+                return publishers
+            time.sleep(0.05)
+        return []
 
     def _on_contacts(self, msg):
         with self.lock:
