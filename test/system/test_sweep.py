@@ -1,6 +1,7 @@
 """Sweeps on real Dask clusters: a local one of two processes, and a `dask scheduler` with two `dask worker`
 processes on 127.0.0.1; a malformed sweep file; an episode that fails; an interrupted sweep resumed."""
 import csv
+import json
 import os
 import signal
 import subprocess
@@ -11,7 +12,7 @@ import pytest
 
 from conftest import ROOT, free_port
 
-from closed_loop.batch import sweep, sweep_file, tune_thresholds
+from closed_loop.batch import sweep, sweep_file, sweep_report, tune_thresholds
 from closed_loop.batch.episode import EpisodeSpec
 
 TINY = """name: tiny
@@ -83,23 +84,21 @@ def test_an_episode_that_fails_is_a_row_with_its_error_and_the_sweep_goes_on(tmp
     assert outcome['no_such_robot']['outcome'] == 'error' and 'no_such_robot' in outcome['no_such_robot']['error']
 
 
-def test_a_sweep_runs_on_a_dask_scheduler_and_workers_started_by_hand(tmp_path):
+@pytest.fixture(scope='module')
+def hand_cluster(tmp_path_factory):
+    """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1, started by hand: (address, its log)."""
     dask = os.path.join(os.path.dirname(sys.executable), 'dask')
     port = free_port()
     address = 'tcp://127.0.0.1:%d' % port
-    logs = open(tmp_path / 'dask.log', 'w')
+    log_path = tmp_path_factory.mktemp('dask') / 'dask.log'
+    logs = open(log_path, 'w')
     procs = [subprocess.Popen([dask, 'scheduler', '--host', '127.0.0.1', '--port', str(port),
                                '--no-dashboard'], stdout=logs, stderr=logs)]
     try:
         procs += [subprocess.Popen([dask, 'worker', address, '--nworkers', '1', '--nthreads', '1', '--host',
                                     '127.0.0.1', '--no-dashboard', '--name', 'w%d' % i],
                                    stdout=logs, stderr=logs) for i in range(2)]
-        spec = tmp_path / 'tiny.yaml'
-        spec.write_text(TINY)
-        assert sweep.main([str(spec), '--output', str(tmp_path / 'out'), '--scheduler', address]) == 0
-        assert len(rows_of(tmp_path / 'out' / 'rows.csv')) == 8
-        log = (tmp_path / 'dask.log').read_text()
-        assert log.count('Register worker') >= 2, log[-2000:]
+        yield address, log_path
     finally:
         for p in reversed(procs):
             p.terminate()
@@ -109,6 +108,122 @@ def test_a_sweep_runs_on_a_dask_scheduler_and_workers_started_by_hand(tmp_path):
             except subprocess.TimeoutExpired:
                 p.kill()
         logs.close()
+
+
+def test_a_sweep_runs_on_a_dask_scheduler_and_workers_started_by_hand(tmp_path, hand_cluster):
+    address, log_path = hand_cluster
+    spec = tmp_path / 'tiny.yaml'
+    spec.write_text(TINY)
+    assert sweep.main([str(spec), '--output', str(tmp_path / 'out'), '--scheduler', address]) == 0
+    assert len(rows_of(tmp_path / 'out' / 'rows.csv')) == 8
+    log = log_path.read_text()
+    assert log.count('Register worker') >= 2, log[-2000:]
+
+
+QUICK = """name: quick
+base: {world: empty, controller: stop_on_obstacle, time_limit_s: 0.5}
+grid:
+  seed: {from: 0, to: 59, step: 1}
+report: {pictures: none}
+"""
+#: Kills a sweep process (SIGKILL) at random moments, resuming it each time, then lets it finish: the sweep is
+#: imported once and each run is a child forked from it (a fresh interpreter per run would cost seconds).
+KILLER = r"""
+import json, os, random, signal, sys, time
+from closed_loop.batch import sweep, sweep_file
+import distributed
+spec, out, address, kills = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+built = sweep_file.load(spec)
+chance = random.Random(7)
+torn = 0
+
+def child():
+    try:
+        with open(os.devnull, 'w') as quiet:
+            sweep.run(built, out, scheduler=address, resume=True, stream=quiet)
+    finally:
+        os._exit(0)
+
+killed_with = []
+for attempt in range(kills + 1):
+    pid = os.fork()
+    if pid == 0:
+        child()
+    if attempt < kills:
+        time.sleep(chance.uniform(0.5, 2.0))
+        os.kill(pid, signal.SIGKILL)
+    os.waitpid(pid, 0)
+    path = os.path.join(out, 'rows.csv')
+    if os.path.exists(path):
+        with open(path, 'rb') as f:
+            data = f.read()
+        killed_with.append([data.count(b'\n') - 1, not data.endswith(b'\n')])
+print(json.dumps(killed_with))
+"""
+
+
+def test_a_sweep_killed_at_random_moments_and_resumed_has_every_row_once_and_the_same_summary(tmp_path,
+                                                                                                hand_cluster):
+    address, _ = hand_cluster
+    spec = tmp_path / 'quick.yaml'
+    spec.write_text(QUICK)
+    built = sweep_file.load(str(spec))
+    whole = sweep.run(built, str(tmp_path / 'whole'), scheduler=address, stream=open(os.devnull, 'w'))
+    script = tmp_path / 'killer.py'
+    script.write_text(KILLER)
+    done = subprocess.run([sys.executable, str(script), str(spec), str(tmp_path / 'out'), address, '20'],
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=HANG_S)
+    assert done.returncode == 0, done.stdout[-3000:]
+    after_each = json.loads(done.stdout.strip().splitlines()[-1])
+    # The kills came before, during and after the episodes (rows counted after each).
+    assert len(after_each) == 21 and after_each[0][0] < 60 and after_each[-1] == [60, False], after_each
+    rows = rows_of(tmp_path / 'out' / 'rows.csv')
+    assert sorted(int(r['index']) for r in rows) == list(range(60))
+    assert sorted(r['spec'] for r in rows) == sorted(r['spec'] for r in whole)
+    assert sweep_report.summarize(rows, built.keys) == sweep_report.summarize(whole, built.keys)
+    results = ('outcome', 'time_s', 'final_x', 'final_y', 'final_yaw', 'min_clearance_m')
+    by_spec = {r['spec']: [r[k] for k in results] for r in whole}
+    assert all([r[k] for k in results] == by_spec[r['spec']] for r in rows)
+
+
+FULL_DISK = """
+import json, subprocess, sys
+spec, out, address = sys.argv[1:4]
+subprocess.run(['mount', '-t', 'tmpfs', '-o', 'size=12k', 'tmpfs', out], check=True)
+def sweep(*more):
+    done = subprocess.run([sys.executable, '-m', 'closed_loop.batch.sweep', spec, '--output', out, '--scheduler',
+                           address] + list(more), stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+    with open(out + '/rows.csv', 'rb') as f:
+        return [done.returncode, done.stderr, f.read().decode()]
+full = sweep()
+subprocess.run(['mount', '-o', 'remount,size=4m', out], check=True)
+print(json.dumps({'full': full, 'resumed': sweep('--resume')}))
+"""
+
+
+@pytest.mark.skipif(os.geteuid() != 0, reason='mounts a small tmpfs (in a mount namespace of its own): needs root')
+def test_a_full_disk_is_one_line_with_the_room_needed_and_the_rows_stay_whole_for_resume(tmp_path, hand_cluster):
+    address, _ = hand_cluster
+    spec = tmp_path / 'quick.yaml'
+    spec.write_text(QUICK)
+    out = tmp_path / 'small'
+    out.mkdir()
+    script = tmp_path / 'full.py'
+    script.write_text(FULL_DISK)
+    done = subprocess.run(['unshare', '--mount', '--propagation', 'private', sys.executable, str(script), str(spec),
+                           str(out), address], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                          universal_newlines=True, timeout=HANG_S)
+    assert done.returncode == 0, done.stdout[-3000:]
+    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    status, err, text = figures['full']
+    lines = [line for line in err.splitlines() if line.strip() and not line.startswith('sweep ')]
+    assert status == 3 and len(lines) == 1 and 'Traceback' not in err, err
+    assert lines[0].startswith('sweep: %s: the disk is full (' % out) and 'MiB more' in lines[0], lines
+    parsed = list(csv.reader(text.splitlines()))
+    assert text.endswith('\r\n') and 1 < len(parsed) < 61 and {len(cells) for cells in parsed} == {len(parsed[0])}
+    status, err, text = figures['resumed']
+    assert status == 0, err
+    assert sorted(int(r['index']) for r in csv.DictReader(text.splitlines())) == list(range(60))
 
 
 def test_an_interrupted_sweep_keeps_its_rows_and_resumes_where_it_stopped(tmp_path):

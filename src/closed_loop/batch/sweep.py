@@ -6,8 +6,9 @@ The sweep file (``closed_loop.batch.sweep_file``) is checked whole before anythi
 one single-threaded worker process per core, listening on 127.0.0.1 only; ``--scheduler
 tcp://HOST:PORT`` sends them to a cluster already running (``dask scheduler`` and ``dask worker``
 on machines that have this package installed). Each finished episode is one row of
-``OUTPUT/rows.csv`` at once (the spec, as JSON and one column per grid key, and the result), so an
-interrupted sweep keeps what it did, and ``--resume`` runs only what is missing. An episode that
+``OUTPUT/rows.csv`` at once, whole or not at all (the spec, as JSON and one column per grid key, and the
+result; ``closed_loop.batch.rows_file``), so an interrupted sweep keeps what it did, and ``--resume`` sets
+aside a row it left torn and runs only what is missing. An episode that
 raises is a row with outcome ``error`` and its message; the sweep goes on. Episodes not as meant (collided, failed, timed
 out, error, any contact) get a picture, drawn where they ran (``OUTPUT/pictures/episode-INDEX.png``; the sweep
 file's ``report:`` chooses, ``closed_loop.batch.pictures``). At the end: a summary table (also
@@ -25,7 +26,7 @@ import sys
 import itertools
 import time
 
-from closed_loop.batch import graph_keeper, pictures, sweep_file, sweep_report
+from closed_loop.batch import graph_keeper, pictures, rows_file, sweep_file, sweep_report
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 
@@ -36,6 +37,9 @@ _CACHE = {}     # per worker process: worlds and profiles loaded once
 #: next one as each finishes, so that neither this process nor the scheduler holds a task per episode of a
 #: sweep of thousands, and a sweep that has drawn its last picture stops asking for more within that many.
 WINDOW_PER_THREAD, WINDOW_MIN = 8, 16
+#: What the rest of a sweep is thought to need on disk before any is measured: a row, a picture (bytes), and
+#: the report at the end (summary, plot, page).
+ROW_BYTES, PICTURE_BYTES, REPORT_BYTES = 1024, 64 * 1024, 512 * 1024
 
 
 def row_key(spec):
@@ -120,69 +124,131 @@ def _client(scheduler, workers):
 
 
 def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.stderr):
-    """Run ``sweep`` (a ``sweep_file.Sweep``) into the directory ``output``; returns all its rows."""
-    import distributed
+    """Run ``sweep`` (a ``sweep_file.Sweep``) into the directory ``output``; returns all its rows. A disk too
+    full for the next row raises ``rows_file.NoRoom`` (every row before it whole)."""
     os.makedirs(output, exist_ok=True)
     rows_path = os.path.join(output, 'rows.csv')
-    existing = read_rows(rows_path)
-    if existing and not resume:
+    if not resume and _has_rows(rows_path):
         raise sweep_file.SweepError('%s: already holds a sweep\'s rows: --resume to go on with it, or choose '
                                     'another --output' % rows_path)
-    done = {row['spec'] for row in existing}
     columns = ['index', 'spec'] + list(sweep.keys) + list(RESULT_COLUMNS)
+    try:
+        rows, existing = rows_file.open_rows(rows_path, columns)
+        traj = rows_file.open_trajectories(os.path.join(output, 'trajectories.jsonl'))
+        os.makedirs(os.path.join(output, sweep_report.PICTURES), exist_ok=True)
+    except OSError as error:
+        if error.errno in rows_file.NO_ROOM:
+            raise rows_file.no_room(output, REPORT_BYTES) from None
+        raise
+    if rows.torn:
+        stream.write('sweep: %d torn or corrupt line(s) of %s set aside in %s.torn; their episodes run again\n'
+                     % (rows.torn, rows_path, rows_path))
+    done = {row['spec'] for row in existing}
     todo = [(i, a, s) for i, (a, s) in enumerate(sweep.specs) if row_key(s) not in done]
-    progress = Progress(len(sweep.specs), len(sweep.specs) - len(todo), stream)
-    new_file = not existing
-    os.makedirs(os.path.join(output, sweep_report.PICTURES), exist_ok=True)
-    keep = sweep.report['max_pictures'] - len(os.listdir(os.path.join(output, sweep_report.PICTURES)))
-    choice = sweep.report['pictures'] if keep > 0 else 'none'
-    with open(rows_path, 'a', newline='') as f, open(os.path.join(output, 'trajectories.jsonl'), 'a') as traj:
-        writer = csv.DictWriter(f, columns, extrasaction='ignore')
-        if new_file:
-            writer.writeheader()
-            f.flush()
+    writing = _Writing(output, rows, traj, columns, len(todo), sweep.report)
+    try:
         if todo:
-            client, cluster = _client(scheduler, workers)
-            logs_root = os.path.abspath(os.path.join(output, 'graphs'))
-            window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
-            pending = iter(todo)
-            futures = {}
-
-            def submit(count):
-                for i, a, s in itertools.islice(pending, count):
-                    wanted = choice if keep > 0 else 'none'
-                    future = client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted,
-                                           key='episode-%d-%s' % (i, _digest(s)), pure=False)
-                    futures[future] = (i, a, s)
-                    running.add(future)
-            running = distributed.as_completed()
-            try:
-                submit(window)
-                for future in running:
-                    i, assignment, spec = futures.pop(future)
-                    result = future.result()
-                    png = result.pop('picture_png', None)
-                    if png is not None and keep > 0:
-                        with open(sweep_report.picture_path(output, i), 'wb') as picture:
-                            picture.write(png)
-                        keep -= 1
-                    row = dict({k: _cell(v) for k, v in assignment.items()}, index=i, spec=row_key(spec),
-                               **{c: result.get(c, '') for c in RESULT_COLUMNS})
-                    writer.writerow(row)
-                    f.flush()
-                    if 'trajectory' in result:
-                        traj.write(json.dumps({'index': i, 'trajectory': result['trajectory']}) + '\n')
-                        traj.flush()
-                    progress.update(result['outcome'])
-                    submit(1)
-            finally:
-                for future in list(futures):
-                    future.cancel()
-                client.close()
-                if cluster is not None:
-                    cluster.close()
-                    _wait_graphs_down(logs_root)
+            _run_todo(todo, writing, Progress(len(sweep.specs), len(sweep.specs) - len(todo), stream), scheduler,
+                      workers)
+    finally:
+        rows.close()
+        traj.close()
     return read_rows(rows_path)
+
+
+def _has_rows(path):
+    """Whether the rows file at ``path`` holds anything past its header line."""
+    try:
+        with open(path, 'rb') as f:
+            f.readline()
+            return bool(f.read(1))
+    except FileNotFoundError:
+        return False
+
+
+class _Writing:
+    """Where a sweep's results go: each row whole to rows.csv, its picture and trajectory beside it; a full
+    disk becomes ``rows_file.NoRoom`` with the room the rest needs."""
+
+    def __init__(self, output, rows, traj, columns, left, report):
+        self.output, self.rows, self.traj, self.columns, self.left = output, rows, traj, columns, left
+        self.keep = report['max_pictures'] - len(os.listdir(os.path.join(output, sweep_report.PICTURES)))
+        self.choice = report['pictures'] if self.keep > 0 else 'none'
+        self.row_bytes, self.picture_bytes = [ROW_BYTES], [PICTURE_BYTES]
+
+    def needed(self):
+        """About how many bytes the rest of the sweep needs: its rows, its pictures, the report."""
+        row = max(self.row_bytes)
+        pictures = max(0, min(self.keep, self.left)) * max(self.picture_bytes) if self.choice != 'none' else 0
+        return self.left * row + pictures + REPORT_BYTES
+
+    def write(self, i, assignment, spec, result):
+        png = result.pop('picture_png', None)
+        row = dict({k: _cell(v) for k, v in assignment.items()}, index=i, spec=row_key(spec),
+                   **{c: result.get(c, '') for c in RESULT_COLUMNS})
+        line = rows_file.csv_line(self.columns, row)
+        self.row_bytes.append(len(line.encode()))
+        try:
+            if png is not None and self.keep > 0:
+                self.picture_bytes.append(len(png))
+                _write_whole(sweep_report.picture_path(self.output, i), png)
+                self.keep -= 1
+            if 'trajectory' in result:
+                self.traj.append(json.dumps({'index': i, 'trajectory': result['trajectory']}) + '\n')
+            self.rows.append(line)
+        except OSError as error:
+            if error.errno in rows_file.NO_ROOM:
+                raise rows_file.no_room(self.output, self.needed()) from None
+            raise
+        self.left -= 1
+
+
+def _write_whole(path, data):
+    """``data`` to ``path`` whole or not at all (a file beside it, renamed)."""
+    part = path + '.part'
+    try:
+        with open(part, 'wb') as f:
+            f.write(data)
+        os.replace(part, path)
+    except OSError:
+        if os.path.exists(part):
+            os.remove(part)
+        raise
+
+
+def _run_todo(todo, writing, progress, scheduler, workers):
+    """Run the episodes ``todo`` ((index, assignment, spec) each) on the cluster, handing it WINDOW_PER_THREAD
+    per worker thread ahead, and write each result as it comes."""
+    import distributed
+    client, cluster = _client(scheduler, workers)
+    logs_root = os.path.abspath(os.path.join(writing.output, 'graphs'))
+    window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
+    pending = iter(todo)
+    futures = {}
+    running = distributed.as_completed()
+
+    def submit(count):
+        for i, a, s in itertools.islice(pending, count):
+            wanted = writing.choice if writing.keep > 0 else 'none'
+            future = client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted,
+                                   key='episode-%d-%s' % (i, _digest(s)), pure=False)
+            futures[future] = (i, a, s)
+            running.add(future)
+    try:
+        submit(window)
+        for future in running:
+            i, assignment, spec = futures.pop(future)
+            result = future.result()
+            writing.write(i, assignment, spec, result)
+            progress.update(result['outcome'])
+            submit(1)
+    finally:
+        for future in list(futures):
+            future.cancel()
+        client.close()
+        if cluster is not None:
+            cluster.close()
+            _wait_graphs_down(logs_root)
 
 
 def _wait_graphs_down(logs_root, timeout_s=graph_keeper.GRACE_S + 5.0):
@@ -221,21 +287,29 @@ def add_cluster_arguments(parser):
 def run_command(prog, make, output, args, preface=None):
     """What a sweep command does: build the sweep (``make()``), run it into ``output`` (default
     sweeps/NAME) and report (``closed_loop.batch.sweep_report``; ``preface(rows)``: lines the page puts
-    first). Returns (exit status, sweep, rows); a refused sweep (2) or Ctrl-C (130) is said on stderr, with no
-    sweep or rows."""
+    first). Returns (exit status, sweep, rows); a refused sweep (2), a full disk (3: one line naming the folder
+    and the room needed) or Ctrl-C (130) is said on stderr, with no sweep or rows."""
     quiet.set_verbose(args.verbose)
     try:
         built = make()
         output = output or os.path.join('sweeps', built.name)
         print('%s %s: %d episodes -> %s' % (prog, built.name, len(built.specs), output), flush=True)
         rows = run(built, output, args.scheduler, args.workers, args.resume)
+        sweep_report.report(built, rows, output, preface=preface(rows) if preface else ())
+    except rows_file.NoRoom as error:
+        print('%s: %s' % (prog, error), file=sys.stderr)
+        return 3, None, None
     except sweep_file.SweepError as error:
         print('%s: %s' % (prog, error), file=sys.stderr)
         return 2, None, None
     except KeyboardInterrupt:
         print('\n%s: interrupted; the rows done are kept: run again with --resume to finish' % prog, file=sys.stderr)
         return 130, None, None
-    sweep_report.report(built, rows, output, preface=preface(rows) if preface else ())
+    except OSError as error:
+        if error.errno not in rows_file.NO_ROOM:
+            raise
+        print('%s: %s' % (prog, rows_file.no_room(output, REPORT_BYTES)), file=sys.stderr)
+        return 3, None, None
     return 0, built, rows
 
 
