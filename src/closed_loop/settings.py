@@ -6,8 +6,11 @@ and :func:`from_params` converts and checks the values, raising :class:`Settings
 parameter's name and what was expected. Defaults live here only; launch files override them.
 """
 import dataclasses
+import functools
 import math
 import typing
+
+from closed_loop.yaml_check import quote
 
 
 #: The least rate (Hz) of any node's timer or sensor: slower would leave its timers, and the watchdogs
@@ -38,30 +41,35 @@ def _coerce(name, kind, value):
             return value
         if isinstance(value, str) and value.lower() in ('true', 'false'):
             return value.lower() == 'true'
-        raise SettingsError('~%s: expected true or false, got %r' % (name, value))
+        raise SettingsError('~%s: expected true or false, got %s' % (name, quote(value)))
     if kind is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise SettingsError('~%s: expected a number, got %r' % (name, value))
+            raise SettingsError('~%s: expected a number, got %s' % (name, quote(value)))
         value = float(value)
         if not math.isfinite(value):
-            raise SettingsError('~%s: expected a finite number, got %r' % (name, value))
+            raise SettingsError('~%s: expected a finite number, got %s' % (name, quote(value)))
         return value
     if kind is int:
         if isinstance(value, bool) or not isinstance(value, int):
             if isinstance(value, float) and value.is_integer():
                 return int(value)
-            raise SettingsError('~%s: expected an integer, got %r' % (name, value))
+            raise SettingsError('~%s: expected an integer, got %s' % (name, quote(value)))
         return value
     if kind is str:
         if not isinstance(value, str):
-            raise SettingsError('~%s: expected a string, got %r' % (name, value))
+            raise SettingsError('~%s: expected a string, got %s' % (name, quote(value)))
         return value
     return value
 
 
+@functools.lru_cache(maxsize=None)
+def _hints(cls):
+    return typing.get_type_hints(cls)
+
+
 def check(settings):
     """Check every field of ``settings`` against its limits; raise SettingsError on the first bad one."""
-    hints = typing.get_type_hints(type(settings))
+    hints = _hints(type(settings))
     for f in dataclasses.fields(settings):
         meta = f.metadata
         value = _coerce(f.name, hints.get(f.name), getattr(settings, f.name))
@@ -70,15 +78,15 @@ def check(settings):
         low, high = meta.get('minimum'), meta.get('maximum')
         if low is not None:
             if meta.get('exclusive_minimum') and not value > low:
-                raise SettingsError('~%s: expected more than %g%s, got %r' % (f.name, low, unit, value))
+                raise SettingsError('~%s: expected more than %g%s, got %s' % (f.name, low, unit, quote(value)))
             if not value >= low:
-                raise SettingsError('~%s: expected at least %g%s, got %r' % (f.name, low, unit, value))
+                raise SettingsError('~%s: expected at least %g%s, got %s' % (f.name, low, unit, quote(value)))
         if high is not None and not value <= high:
-            raise SettingsError('~%s: expected at most %g%s, got %r' % (f.name, high, unit, value))
+            raise SettingsError('~%s: expected at most %g%s, got %s' % (f.name, high, unit, quote(value)))
         choices = meta.get('choices')
         if choices is not None and value not in choices:
-            raise SettingsError('~%s: expected one of %s, got %r'
-                                % (f.name, ', '.join(map(str, choices)), value))
+            raise SettingsError('~%s: expected one of %s, got %s'
+                                % (f.name, ', '.join(map(str, choices)), quote(value)))
     extra = getattr(settings, 'check_together', None)
     if extra is not None:
         extra()

@@ -8,6 +8,8 @@ Free of ROS; world files use it, and any later input file (a sweep spec) can.
 """
 import math
 import os
+import re
+import reprlib
 
 import yaml
 
@@ -16,14 +18,47 @@ MAX_QUOTE_CHARS = 120
 # Marks a required key that is absent, so messages can say so instead of printing a value.
 MISSING = object()
 _MERGE_TAG = 'tag:yaml.org,2002:merge'
+#: A key an error may quote: a name, as every key of our files is.
+KEY_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_.-]{0,63}$')
+
+
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 3, 8, 8, 8
+_SHORT.maxstring = _SHORT.maxother = _SHORT.maxlong = MAX_QUOTE_CHARS
 
 
 def quote(value, limit=MAX_QUOTE_CHARS):
-    """``repr(value)`` on one line, cut to ``limit`` characters with the total length said."""
-    text = repr(value)
-    if len(text) <= limit:
-        return text
-    return '%s... (%d characters in all)' % (text[:limit], len(text))
+    """``repr(value)`` on one line, cut to ``limit`` characters (a deep or huge value, such as a YAML alias
+    bomb, is never written out whole: nested and long parts are elided before they are made)."""
+    if isinstance(value, Kind):
+        return value.text
+    text = ' '.join(_SHORT.repr(value).splitlines())
+    if isinstance(value, str) and len(value) + 2 > limit:
+        return '%s... (%d characters in all)' % (text[:limit], len(value) + 2)
+    return text if len(text) <= limit else text[:limit] + '...'
+
+
+class Kind:
+    """What a value is, without its content: for a file that did not parse as the YAML expected (a file
+    that is no world, no sweep), whose content an error must not show."""
+
+    def __init__(self, value):
+        if isinstance(value, str):
+            self.text = 'text (%d characters), not a mapping' % len(value)
+        elif isinstance(value, (list, tuple)):
+            self.text = 'a list of %d items' % len(value)
+        elif value is None:
+            self.text = 'an empty document'
+        else:
+            self.text = 'a %s' % type(value).__name__
+
+    @classmethod
+    def said(cls, text):
+        """A parser's own words about a problem (no content of the file beyond what it names), cut short."""
+        kind = cls(None)
+        words = ' '.join(str(text).split())
+        kind.text = words if len(words) <= MAX_QUOTE_CHARS else words[:MAX_QUOTE_CHARS] + '...'
+        return kind
 
 
 class FileError(ValueError):
@@ -99,9 +134,9 @@ def load_yaml(text, source, error_class=FileError):
             # The start of the unclosed bracket or block is often the real culprit.
             problem = '%s (%s started on line %d)' % (problem, error.context,
                                                       error.context_mark.line + 1)
-        raise error_class(source, where, 'valid YAML', problem) from None
+        raise error_class(source, where, 'valid YAML', Kind.said(problem)) from None
     except yaml.YAMLError as error:
-        raise error_class(source, '(file)', 'valid YAML', str(error)) from None
+        raise error_class(source, '(file)', 'valid YAML', Kind.said(type(error).__name__)) from None
 
 
 def finite_float(value):
@@ -140,9 +175,14 @@ class Checker:
     def mapping(self, value, field, allowed):
         """``value`` must be a mapping whose keys are all in ``allowed``."""
         if not isinstance(value, dict):
-            self.fail(field, 'a mapping', value)
+            # A document that is not a mapping at all is not this kind of file: its content is not shown.
+            self.fail(field, 'a mapping', Kind(value) if field == '(top level)' else value)
         for key in value:
             if key not in allowed:
+                if not isinstance(key, str) or not KEY_NAME.match(key):
+                    # Not even a name: likely a file of another kind, whose content is not shown.
+                    self.fail(field, 'only known keys (%s)' % ', '.join(allowed), Kind.said(
+                        'a key that is no name (%d characters)' % len(str(key))))
                 sub = '%s.%s' % (field, key) if field != '(top level)' else str(key)
                 self.fail(sub, 'a known key (%s)' % ', '.join(allowed), key)
         return value

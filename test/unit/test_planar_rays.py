@@ -136,3 +136,25 @@ def test_the_planar_caster_refuses_a_world_with_other_robots():
             Lidar(LidarSettings(ray_caster='planar'), sim.view(0))
     finally:
         sim.close()
+
+
+@pytest.mark.parametrize('seed', range(2))
+def test_culling_by_angular_window_gives_the_brute_force_distances_to_the_bit(seed):
+    """Each obstacle tested only against the rays its bounding circle can cover: the same ranges as every ray
+    against every obstacle, from origins among the obstacles (inside some boxes' bounding circles), with the
+    scan's bearings wrapping past +-pi and the plane tilted."""
+    world = clutter(seed, count=300)
+    caster = PlanarRays(world.obstacles)
+    centres = numpy.array([o.position for o in world.obstacles])
+    rng = numpy.random.default_rng(seed)
+    for trial in range(12):
+        origin = (float(rng.uniform(-6, 6)), float(rng.uniform(-6, 6)), 0.2)
+        yaw, tilt = float(rng.uniform(-math.pi, math.pi)), float(rng.choice([0.0, 0.0, 0.02, -0.03]))
+        count = int(rng.choice([360, 720, 1081]))
+        angles = yaw + numpy.linspace(-2.35, 2.35, count)
+        level = math.cos(tilt)
+        dirs = numpy.column_stack((level * numpy.cos(angles), level * numpy.sin(angles),
+                                   numpy.full(count, math.sin(tilt))))
+        culled = caster.cast(centres, origin, dirs, 30.0)
+        brute = caster.cast(centres, origin, dirs, 30.0, cull=False)
+        assert numpy.array_equal(culled, brute), (seed, trial, numpy.flatnonzero(culled != brute)[:5])

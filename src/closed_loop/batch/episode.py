@@ -33,6 +33,7 @@ from closed_loop.batch.judge import JudgeSettings, Verdict
 from closed_loop.sim.rig import Rig
 from closed_loop.settings import SettingsError, check
 from closed_loop.sim.world import load_world, parse_world, resolve_world
+from closed_loop.yaml_check import quote
 
 #: A goal counts as reached when ground truth ends this close to it (m), with no contact.
 SUCCESS_RADIUS_M = JudgeSettings().success_radius
@@ -76,7 +77,7 @@ class EpisodeSpec:
     def from_dict(cls, data, where='episode'):
         """A spec from plain values (a sweep row, a YAML mapping); unknown or ill-typed fields are refused."""
         if not isinstance(data, dict):
-            raise EpisodeError('%s: expected a mapping of episode fields, got %r' % (where, data))
+            raise EpisodeError('%s: expected a mapping of episode fields, got %s' % (where, quote(data)))
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(data) - names)
         if unknown:
@@ -110,8 +111,8 @@ def load_episode_world(spec_world, profile):
     """The :class:`closed_loop.sim.world.World` a spec's ``world`` names."""
     if isinstance(spec_world, dict):
         if set(spec_world) != {'generator'} or not isinstance(spec_world['generator'], dict):
-            raise EpisodeError("world: expected a world name, a file, or {'generator': {...}}, got %r"
-                               % (spec_world,))
+            raise EpisodeError("world: expected a world name, a file, or {'generator': {...}}, got %s"
+                               % (quote(spec_world),))
         try:
             settings = clutter.ClutterSettings(**dict({'profile': profile.name}, **spec_world['generator']))
         except TypeError as error:
@@ -214,19 +215,19 @@ def prepare(spec, cache=None):
         value = getattr(spec, name)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
                 or value < low:
-            raise EpisodeError('%s: expected a number of s, at least %g, got %r' % (name, low, value))
+            raise EpisodeError('%s: expected a number of s, at least %g, got %s' % (name, low, quote(value)))
     for name in ('keep_trajectory', 'end_on_contact'):
         if not isinstance(getattr(spec, name), bool):
-            raise EpisodeError('%s: expected true or false, got %r' % (name, getattr(spec, name)))
+            raise EpisodeError('%s: expected true or false, got %s' % (name, quote(getattr(spec, name))))
     rtf = spec.real_time_factor
     if rtf is not None and (isinstance(rtf, bool) or not isinstance(rtf, (int, float)) or not 0.1 <= rtf <= 20.0):
-        raise EpisodeError('real_time_factor: expected a number from 0.1 to 20 (simulated s per wall s), got %r'
-                           % (rtf,))
+        raise EpisodeError('real_time_factor: expected a number from 0.1 to 20 (simulated s per wall s), got %s'
+                           % (quote(rtf),))
     start = world.robot_start
     goal_world = tuple(spec.goal) if spec.goal is not None else world.goal
     if goal_world is not None and (len(goal_world) != 2 or not all(
             isinstance(v, (int, float)) and math.isfinite(v) for v in goal_world)):
-        raise EpisodeError('goal: expected [x, y] in m, got %r' % (spec.goal,))
+        raise EpisodeError('goal: expected [x, y] in m, got %s' % (quote(spec.goal),))
     goal = _to_odom(start, *goal_world) if goal_world is not None else None
     if goal is None and extra and getattr(extra[0], 'goal_distance', 0.0) > 0.0:
         d = extra[0].goal_distance

@@ -27,6 +27,7 @@ from closed_loop.batch import graph_keeper
 from closed_loop.batch.episode import EpisodeError, judge_settings, result_from_verdict
 from closed_loop.batch.judge import Verdict, track_from_dict
 from closed_loop.sim import clutter
+from closed_loop.yaml_check import quote
 
 #: Simulated s per wall s in a graph episode, unless the spec says: the fastest at which a graph episode
 #: still agrees with real time (docs/episodes.md, "Graph episodes": measured).
@@ -57,29 +58,29 @@ def parse_controller(value, node_names):
         raise EpisodeError('controller.%s: expected one of %s' % (unknown[0], ', '.join(CONTROLLER_KEYS)))
     if ('launch' in value) == ('node' in value):
         raise EpisodeError('controller: expected a launch file (launch: PKG/path.launch) or a node of this package '
-                           '(node: NAME), one of them, got %r' % (value,))
+                           '(node: NAME), one of them, got %s' % (quote(value),))
     if 'node' in value and value['node'] not in node_names:
-        raise EpisodeError('controller.node: expected one of %s, got %r' % (', '.join(sorted(node_names)), value['node']))
+        raise EpisodeError('controller.node: expected one of %s, got %s' % (', '.join(sorted(node_names)), quote(value['node'])))
     if 'launch' in value:
         launch = value['launch']
         if not isinstance(launch, str) or not launch.endswith(('.launch', '.xml')):
-            raise EpisodeError('controller.launch: expected PKG/path/file.launch or an absolute path, got %r' % (launch,))
+            raise EpisodeError('controller.launch: expected PKG/path/file.launch or an absolute path, got %s' % (quote(launch),))
         if '$(' in launch:
             raise EpisodeError('controller.launch: %r has "$(" in it, which roslaunch would take for a substitution'
                                % (launch,))
         parts = launch.split('/')
         if not os.path.isabs(launch) and (not PACKAGE.match(parts[0]) or len(parts) < 2 or '..' in parts):
             raise EpisodeError('controller.launch: expected PKG/path/file.launch (a package name, then a path in '
-                               'it) or an absolute path, got %r' % (launch,))
+                               'it) or an absolute path, got %s' % (quote(launch),))
     args = value.get('args') or {}
     if not isinstance(args, dict) or 'node' in value and args:
-        raise EpisodeError('controller.args: expected a mapping of a launch file\'s args, got %r' % (args,))
+        raise EpisodeError('controller.args: expected a mapping of a launch file\'s args, got %s' % (quote(args),))
     for name, arg in args.items():
         if not isinstance(name, str) or not ARG_NAME.match(name):
-            raise EpisodeError('controller.args: %r is not an arg name' % (name,))
+            raise EpisodeError('controller.args: %s is not an arg name' % (quote(name),))
         if not isinstance(arg, (str, int, float, bool)) or '$(' in str(arg):
             raise EpisodeError('controller.args.%s: expected a string, number or boolean (no $(...) substitution), '
-                               'got %r' % (name, arg))
+                               'got %s' % (name, quote(arg)))
     if not isinstance(value.get('mode_topic', ''), str) or not isinstance(value.get('end_at_rest', True), bool):
         raise EpisodeError('controller: mode_topic is a topic name and end_at_rest true or false')
     return value

@@ -144,12 +144,14 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
         stream.write('sweep: %d torn or corrupt line(s) of %s set aside in %s.torn; their episodes run again\n'
                      % (rows.torn, rows_path, rows_path))
     done = {row['spec'] for row in existing}
-    todo = [(i, a, s) for i, (a, s) in enumerate(sweep.specs) if row_key(s) not in done]
-    writing = _Writing(output, rows, traj, columns, len(todo), sweep.report)
+    # The grid's episodes are made as they are handed out (a sweep of a million does not make them first).
+    todo = ((i, a, s) for i, (a, s) in enumerate(sweep.specs) if row_key(s) not in done)
+    total = len(sweep.specs)
+    left = max(0, total - len(done))
+    writing = _Writing(output, rows, traj, columns, left, sweep.report)
     try:
-        if todo:
-            _run_todo(todo, writing, Progress(len(sweep.specs), len(sweep.specs) - len(todo), stream), scheduler,
-                      workers)
+        if left:
+            _run_todo(todo, writing, Progress(total, total - left, stream), scheduler, workers)
     finally:
         rows.close()
         traj.close()
@@ -274,6 +276,12 @@ def _cell(value):
     return json.dumps(value) if isinstance(value, (dict, list, tuple)) else value
 
 
+def checking(done, total, stream=sys.stderr):
+    """What a long check of a sweep file says: how far it is."""
+    stream.write('checking the sweep file: %d of %d checks\n' % (done, total))
+    stream.flush()
+
+
 def add_cluster_arguments(parser):
     """The options every sweep command has: where it runs, and --resume."""
     parser.add_argument('--scheduler', help='tcp://HOST:PORT of a running Dask scheduler (default: a local '
@@ -320,7 +328,7 @@ def main(argv=None):
                         '(default: sweeps/NAME in the current directory)')
     add_cluster_arguments(parser)
     args = parser.parse_args(argv)
-    status, _, rows = run_command('sweep', lambda: sweep_file.load(args.spec), args.output, args)
+    status, _, rows = run_command('sweep', lambda: sweep_file.load(args.spec, checking), args.output, args)
     if status:
         return status
     errors = sum(r['outcome'] == 'error' for r in rows)

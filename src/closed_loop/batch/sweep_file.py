@@ -1,5 +1,5 @@
-"""Sweep files: a grid of episodes (``closed_loop.batch.episode.EpisodeSpec``) in YAML, checked whole before
-anything runs. Free of ROS.
+"""Sweep files: a grid of episodes (``closed_loop.batch.episode.EpisodeSpec``) in YAML, checked before anything
+runs. Free of ROS.
 
 .. code-block:: yaml
 
@@ -20,10 +20,12 @@ A grid key is an EpisodeSpec field (``world``, ``robot``, ``controller``, ``seed
 ``goal``, ``time_limit_s``, ...), or ``settings.NAME`` (a controller ``~parameter``), ``sim.NAME`` (a
 simulator or sensor ``~parameter``), ``args.NAME`` (an arg of a graph controller's launch file,
 ``controller: {launch: PKG/path.launch}``) or ``world.generator.NAME`` (a
-``closed_loop.sim.clutter.ClutterSettings`` field). Its values are a list, or ``{from, to, step}`` (both ends included). Every combination is then
-checked as an episode would be (the controller's settings by the class its node uses, the world loaded or
-its generator's settings checked); the first problem is an error that names the file, the field and what
-was expected.
+``closed_loop.sim.clutter.ClutterSettings`` field). Its values are a list, or ``{from, to, step}`` (both ends
+included). Each distinct value of each key is then checked as an episode would be (the controller's settings
+by the class its node uses, the world loaded or its generator's settings checked), and every combination of
+a grid of at most :data:`CHECK_ALL`; the first problem is an error that names the file, the field and what
+was expected. The combinations are made lazily (:class:`Grid`); those of a larger grid are checked as their
+episodes are made.
 
 ``report``: which episodes get a picture (``closed_loop.batch.pictures``), drawn where the episode ran:
 ``pictures: failures`` (those not as meant: collided, failed, timed out, error, or any contact), ``all`` or
@@ -33,15 +35,24 @@ closed_loop episode_plot OUTPUT INDEX``.
 import itertools
 import math
 import re
+import time
 
 import yaml
 
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare
+from closed_loop.yaml_check import Checker, FileError, load_yaml, quote, read_text
 
 SPEC_FIELDS = tuple(EpisodeSpec.__dataclass_fields__)
 NAME_PATTERN = re.compile(r'^[A-Za-z0-9_-]{1,64}$')
+#: A sweep file's keys, and its largest size (bytes).
+TOP_KEYS, MAX_FILE_BYTES = ('name', 'base', 'grid', 'plot', 'report'), 1024 * 1024
 #: A grid may not have more combinations than this (a typo in a range should not start a million).
 MAX_EPISODES = 1000000
+#: A grid of at most this many combinations has each one checked before anything runs (about 0.2 ms each);
+#: a larger one has each key's values checked, and its combinations as their episodes are made.
+CHECK_ALL = 10000
+#: How often a long check says how far it is (s).
+PROGRESS_S = 1.0
 #: ``report:`` when a sweep file does not say; a picture is about 40 kB and 0.2 s of a worker's time.
 REPORT_DEFAULTS = {'pictures': 'failures', 'max_pictures': 100}
 PICTURE_CHOICES = ('failures', 'all', 'none')
@@ -55,21 +66,96 @@ def _values(source, key, raw):
     where = '%s: grid.%s' % (source, key)
     if isinstance(raw, dict):
         if set(raw) != {'from', 'to', 'step'}:
-            raise SweepError('%s: expected a list of values or {from, to, step}, got %r' % (where, raw))
+            raise SweepError('%s: expected a list of values or {from, to, step}, got %s' % (where, quote(raw)))
         a, b, step = raw['from'], raw['to'], raw['step']
         for name, value in (('from', a), ('to', b), ('step', step)):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise SweepError('%s.%s: expected a number, got %r' % (where, name, value))
+                raise SweepError('%s.%s: expected a number, got %s' % (where, name, quote(value)))
         if not step > 0 or b < a:
-            raise SweepError('%s: expected step > 0 and to >= from, got %r' % (where, raw))
+            raise SweepError('%s: expected step > 0 and to >= from, got %s' % (where, quote(raw)))
         count = int(math.floor((b - a) / step + 1e-9)) + 1
         if count > MAX_EPISODES:
             raise SweepError('%s: %d values is too many' % (where, count))
-        integral = all(isinstance(v, int) for v in (a, b, step))
-        return [a + i * step if integral else round(a + i * step, 10) for i in range(count)]
+        return Range(a, step, count)
     if not isinstance(raw, list) or not raw:
-        raise SweepError('%s: expected a non-empty list of values or {from, to, step}, got %r' % (where, raw))
+        raise SweepError('%s: expected a non-empty list of values or {from, to, step}, got %s' % (where, quote(raw)))
     return list(raw)
+
+
+class Range:
+    """The values of ``{from, to, step}``, made when asked for (a range of a million seeds is not a list)."""
+
+    def __init__(self, start, step, count):
+        self.start, self.step, self.count = start, step, count
+        self.integral = all(isinstance(v, int) for v in (start, step))
+
+    def __len__(self):
+        return self.count
+
+    def __getitem__(self, i):
+        if not 0 <= i < self.count:
+            raise IndexError(i)
+        value = self.start + i * self.step
+        return value if self.integral else round(value, 10)
+
+    def __iter__(self):
+        return (self[i] for i in range(self.count))
+
+    def distinct(self):
+        """The values a check looks at: the two ends (every value lies between them, of the same type)."""
+        return [self[0], self[self.count - 1]] if self.count > 1 else [self[0]]
+
+
+def _distinct(values):
+    if isinstance(values, Range):
+        return values.distinct()
+    seen = []
+    for value in values:
+        if value not in seen:
+            seen.append(value)
+    return seen
+
+
+class Grid:
+    """Every combination of a sweep's axes ([(key, values)]) over ``base``, as (assignment, EpisodeSpec), made
+    when iterated (the last key varying fastest); ``len`` without making any."""
+
+    def __init__(self, base, axes, source):
+        self.base, self.axes, self.source = base, axes, source
+        self.count = 1
+        for _, values in axes:
+            self.count *= len(values)
+
+    def __len__(self):
+        return self.count
+
+    def __getitem__(self, index):
+        if not 0 <= index < self.count:
+            raise IndexError(index)
+        assignment = {}
+        for key, values in reversed(self.axes):
+            index, i = divmod(index, len(values))
+            assignment[key] = values[i]
+        assignment = {key: assignment[key] for key, _ in self.axes}
+        return assignment, _spec(self.base, assignment, self.source)
+
+    def __iter__(self):
+        return (self[i] for i in range(self.count))
+
+
+def _spec(base, assignment, source, cache=None):
+    """The EpisodeSpec of ``assignment`` over ``base``; with ``cache``, also prepared (every check an episode
+    makes before it runs). A problem is a SweepError naming the combination."""
+    where = '%s: grid (%s)' % (source, ', '.join('%s=%s' % (k, quote(v, 60)) for k, v in assignment.items()))
+    try:
+        spec = EpisodeSpec.from_dict(apply(base, assignment), where)
+        if cache is not None:
+            prepare(spec, cache)
+    except EpisodeError as error:
+        raise SweepError('%s: %s' % (where, error) if not str(error).startswith(where) else str(error))
+    except TypeError as error:
+        raise SweepError('%s: %s' % (where, error))
+    return spec
 
 
 def _check_key(source, key):
@@ -122,77 +208,72 @@ def _report(source, raw):
     if raw is None:
         return dict(REPORT_DEFAULTS)
     if not isinstance(raw, dict) or not set(raw) <= set(REPORT_DEFAULTS):
-        raise SweepError('%s: report: expected {pictures: failures|all|none, max_pictures: N}, got %r' % (source, raw))
+        raise SweepError('%s: report: expected {pictures: failures|all|none, max_pictures: N}, got %s' % (source, quote(raw)))
     report = dict(REPORT_DEFAULTS, **raw)
     if report['pictures'] not in PICTURE_CHOICES:
-        raise SweepError('%s: report.pictures: expected one of %s, got %r'
-                         % (source, ', '.join(PICTURE_CHOICES), report['pictures']))
+        raise SweepError('%s: report.pictures: expected one of %s, got %s'
+                         % (source, ', '.join(PICTURE_CHOICES), quote(report['pictures'])))
     count = report['max_pictures']
     if isinstance(count, bool) or not isinstance(count, int) or count < 0:
-        raise SweepError('%s: report.max_pictures: expected a whole number >= 0, got %r' % (source, count))
+        raise SweepError('%s: report.max_pictures: expected a whole number >= 0, got %s' % (source, quote(count)))
     return report
 
 
-def build(name, base, grid, plot=None, source='<sweep>', report=None, text=None):
+def build(name, base, grid, plot=None, source='<sweep>', report=None, text=None, progress=None):
     """A :class:`Sweep` from a base spec (dict), a grid ({key: values}), a plot choice and a report choice,
-    every combination checked. ``text``: the sweep as written (default: those values as YAML)."""
+    checked (:func:`_check`; ``progress(done, total)`` hears of a long check). ``text``: the sweep as written
+    (default: those values as YAML)."""
     if not isinstance(name, str) or not NAME_PATTERN.match(name):
-        raise SweepError('%s: name: expected 1 to 64 letters, digits, _ or -, got %r' % (source, name))
+        raise SweepError('%s: name: expected 1 to 64 letters, digits, _ or -, got %s' % (source, quote(name)))
     if not isinstance(base, dict):
-        raise SweepError('%s: base: expected a mapping of episode fields, got %r' % (source, base))
+        raise SweepError('%s: base: expected a mapping of episode fields, got %s' % (source, quote(base)))
     if not isinstance(grid, dict) or not grid:
-        raise SweepError('%s: grid: expected a mapping of keys to value lists, got %r' % (source, grid))
+        raise SweepError('%s: grid: expected a mapping of keys to value lists, got %s' % (source, quote(grid)))
     axes = []
     for key, raw in grid.items():
         _check_key(source, str(key))
         axes.append((str(key), _values(source, key, raw)))
-    total = 1
-    for _, values in axes:
-        total *= len(values)
-    if total > MAX_EPISODES:
-        raise SweepError('%s: grid: %d episodes is more than %d' % (source, total, MAX_EPISODES))
+    grid_specs = Grid(base, axes, source)
+    if len(grid_specs) > MAX_EPISODES:
+        raise SweepError('%s: grid: %d episodes is more than %d' % (source, len(grid_specs), MAX_EPISODES))
     if plot is not None:
         if not isinstance(plot, dict) or not set(plot) <= {'x', 'lines'} or 'x' not in plot:
-            raise SweepError("%s: plot: expected {x: KEY, lines: KEY} (lines optional), got %r" % (source, plot))
+            raise SweepError("%s: plot: expected {x: KEY, lines: KEY} (lines optional), got %s" % (source, quote(plot)))
         for part, key in plot.items():
             if key not in grid:
-                raise SweepError('%s: plot.%s: expected one of the grid keys (%s), got %r'
-                                 % (source, part, ', '.join(grid), key))
-    cache, specs = {}, []
-    keys = [k for k, _ in axes]
-    for combo in itertools.product(*[values for _, values in axes]):
-        assignment = dict(zip(keys, combo))
-        where = '%s: grid (%s)' % (source, ', '.join('%s=%r' % kv for kv in assignment.items()))
-        try:
-            spec = EpisodeSpec.from_dict(apply(base, assignment), where)
-            prepare(spec, cache)
-        except EpisodeError as error:
-            raise SweepError('%s: %s' % (where, error) if not str(error).startswith(where) else str(error))
-        except TypeError as error:
-            raise SweepError('%s: %s' % (where, error))
-        specs.append((assignment, spec))
+                raise SweepError('%s: plot.%s: expected one of the grid keys (%s), got %s'
+                                 % (source, part, ', '.join(grid), quote(key)))
+    _check(grid_specs, progress)
     if text is None:
         text = yaml.safe_dump({'name': name, 'base': base, 'grid': grid, 'plot': plot, 'report': report},
                               sort_keys=False, default_flow_style=None)
-    return Sweep(name, keys, specs, plot, _report(source, report), text)
+    return Sweep(name, [k for k, _ in axes], grid_specs, plot, _report(source, report), text)
 
 
-def load(path):
-    """The :class:`Sweep` of the file at ``path``."""
+def _check(grid, progress):
+    """Check the grid before anything runs: each distinct value of each key once (a range: its two ends), with
+    the other keys at their first values; then every combination, if there are at most CHECK_ALL of them
+    (more are checked as their episodes are made: a combination that breaks a rule is its episode's error
+    row). ``progress(done, total)`` is told every PROGRESS_S of a long check."""
+    cache, first = {}, {key: values[0] for key, values in grid.axes}
+    trials = [dict(first, **{key: value}) for key, values in grid.axes for value in _distinct(values)]
+    combinations = range(len(grid)) if len(grid) <= CHECK_ALL else ()
+    total, told = len(trials) + len(combinations), time.monotonic()
+    for done, assignment in enumerate(itertools.chain(trials, (grid[i][0] for i in combinations))):
+        _spec(grid.base, assignment, grid.source, cache)
+        if progress is not None and time.monotonic() - told > PROGRESS_S:
+            progress(done, total)
+            told = time.monotonic()
+
+
+def load(path, progress=None):
+    """The :class:`Sweep` of the file at ``path`` (at most MAX_FILE_BYTES of UTF-8 YAML, no key twice in a
+    mapping). A file that is not a sweep file is refused without quoting it."""
     try:
-        with open(path) as f:
-            text = f.read()
-        data = yaml.safe_load(text)
-    except OSError as error:
-        raise SweepError('%s: cannot be read (%s)' % (path, error.strerror or error))
-    except UnicodeDecodeError:
-        raise SweepError('%s: not a sweep file (not UTF-8 text)' % path) from None
-    except yaml.YAMLError as error:
-        raise SweepError('%s: not valid YAML (%s)' % (path, error))
-    if not isinstance(data, dict):
-        raise SweepError('%s: expected a mapping with name, base, grid (and plot, report), got %r' % (path, data))
-    unknown = sorted(set(data) - {'name', 'base', 'grid', 'plot', 'report'})
-    if unknown:
-        raise SweepError('%s: %s: expected only name, base, grid, plot and report' % (path, unknown[0]))
+        text = read_text(path, MAX_FILE_BYTES, what='sweep file')
+        data = load_yaml(text, path)
+        Checker(path).mapping(data, '(top level)', TOP_KEYS)
+    except FileError as error:
+        raise SweepError(str(error)) from None
     return build(data.get('name'), data.get('base', {}), data.get('grid'), data.get('plot'), path,
-                 data.get('report'), text)
+                 data.get('report'), text, progress)

@@ -26,6 +26,7 @@ node's name, and its section in a robot profile) and ``settings_class`` (a ``Loo
 a script of a few lines that starts the controller node with that name (docs/development.md).
 """
 import collections
+import functools
 import importlib
 import pkgutil
 
@@ -142,11 +143,17 @@ class Controller:
         return {}
 
 
+@functools.lru_cache(maxsize=None)
+def _import_modules():
+    """Import every module of this package, once (a class defined later, elsewhere, is still found)."""
+    for module in pkgutil.iter_modules(__path__):
+        importlib.import_module('%s.%s' % (__name__, module.name))
+
+
 def controller_classes():
     """{name: class} of every controller in this package."""
     found = {}
-    for module in pkgutil.iter_modules(__path__):
-        importlib.import_module('%s.%s' % (__name__, module.name))
+    _import_modules()
     stack = list(Controller.__subclasses__())
     while stack:
         cls = stack.pop()

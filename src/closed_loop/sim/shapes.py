@@ -68,18 +68,19 @@ class Box:
 
     @staticmethod
     def ray_distances(params, centres, origin, dirs):
-        """(N, M) distance from ``origin`` (x, y) along each of ``dirs`` ((N, 2), unit) to each of M boxes
-        (``params`` rows of :meth:`ray_params`, centres ``centres`` (M, 2)); inf where the ray misses (or
-        starts inside)."""
-        c, s, half = params[:, 0], params[:, 1], params[:, 2:4]
+        """Distance from ``origin`` (x, y) along ``dirs`` (unit, (..., 2)) to boxes (``params`` rows of
+        :meth:`ray_params`, (..., 5); centres ``centres``, (..., 2)), all three broadcast together (each ray
+        against each box: ``params[None]``, ``centres[None]``, ``dirs[:, None]``; ray-box pairs: as they come);
+        inf where the ray misses (or starts inside)."""
+        c, s, hx, hy = params[..., 0], params[..., 1], params[..., 2], params[..., 3]
         rel = numpy.asarray(origin) - centres
-        ox, oy = c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1]        # (M,) in each box
-        dx = dirs[:, :1] * c + dirs[:, 1:] * s                                        # (N, M)
-        dy = -dirs[:, :1] * s + dirs[:, 1:] * c
+        ox, oy = c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]      # in each box
+        dx = dirs[..., 0] * c + dirs[..., 1] * s
+        dy = -dirs[..., 0] * s + dirs[..., 1] * c
         with numpy.errstate(divide='ignore', invalid='ignore'):
             inv_x, inv_y = 1.0 / dx, 1.0 / dy
-            ax, bx = (-half[:, 0] - ox) * inv_x, (half[:, 0] - ox) * inv_x
-            ay, by = (-half[:, 1] - oy) * inv_y, (half[:, 1] - oy) * inv_y
+            ax, bx = (-hx - ox) * inv_x, (hx - ox) * inv_x
+            ay, by = (-hy - oy) * inv_y, (hy - oy) * inv_y
             near = numpy.maximum(numpy.fmin(ax, bx), numpy.fmin(ay, by))
             far = numpy.minimum(numpy.fmax(ax, bx), numpy.fmax(ay, by))
         return numpy.where((near <= far) & (near >= 0.0), near, numpy.inf)
@@ -123,10 +124,10 @@ class Cylinder:
     @staticmethod
     def ray_distances(params, centres, origin, dirs):
         """As :meth:`Box.ray_distances`, for cylinders."""
-        radius = params[:, 0]
-        rel = centres - numpy.asarray(origin)                      # (M, 2) from the origin
-        b = dirs @ rel.T                                            # (N, M) along each ray to the closest point
-        disc = b * b - ((rel * rel).sum(axis=1) - radius * radius)
+        radius = params[..., 0]
+        rx, ry = centres[..., 0] - origin[0], centres[..., 1] - origin[1]     # from the origin
+        b = dirs[..., 0] * rx + dirs[..., 1] * ry                   # along each ray to the closest point
+        disc = b * b - (rx * rx + ry * ry - radius * radius)
         t = b - numpy.sqrt(numpy.maximum(disc, 0.0))
         return numpy.where((disc >= 0.0) & (t >= 0.0), t, numpy.inf)
 

@@ -17,15 +17,22 @@ Adding a sensor: a file here with such a class, a conversion to its message in
 """
 
 
+import functools
 import importlib
 import pkgutil
 
 
 def all_sensor_classes():
     """Every sensor class of this package (a :class:`Sensor` subclass in one of its modules), by name."""
+    _import_modules()
+    return sorted(Sensor.__subclasses__(), key=lambda cls: cls.__name__)
+
+
+@functools.lru_cache(maxsize=None)
+def _import_modules():
+    """Import every module of this package, once."""
     for module in pkgutil.iter_modules(__path__):
         importlib.import_module('%s.%s' % (__name__, module.name))
-    return sorted(Sensor.__subclasses__(), key=lambda cls: cls.__name__)
 
 
 class Sensor:
