@@ -56,7 +56,7 @@ def test_a_tiny_sweep_on_a_local_cluster_writes_rows_summary_plot_and_a_recommen
 
 
 @pytest.mark.parametrize('text, message', [
-    ('name: x\ngrid: [1, 2\n', 'not valid YAML'),
+    ('name: x\ngrid: [1, 2\n', 'expected valid YAML'),
     ('name: x\ngrid: {seed: [0]}\ncolour: red\n', 'colour: expected a known key (name, base, grid, plot, report)'),
     ('name: x\ngrid: {speed: [0.5]}\n', 'grid.speed: expected an episode field'),
     ('name: x\ngrid: {settings.stop_distance: {from: 0.5, to: 0.1, step: 0.1}}\n', 'expected step > 0 and to >= from'),
