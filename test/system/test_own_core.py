@@ -60,5 +60,9 @@ def test_a_throw_away_core_runs_in_an_episode_and_in_the_graph_alike(tmp_path, r
     graph = drive_in_sim(env, tmp_path, [sys.executable, '-c', HOST, str(tmp_path)], WATCH)
     logs = (tmp_path / 'controller.log').read_text()
     assert graph['modes'][:2] == ['CREEPING', 'HALTED'], (graph, logs)
-    assert abs(graph['x'] - episode.final_pose[0]) < 0.03, (graph, episode.final_pose, logs)
+    # The core acts on its timer (10 Hz) and reads the latest scan (10 Hz); at one simulated instant a graph may
+    # deliver the tick before or after the scan, the episode loop always in one order: the graph may halt one
+    # tick apart, 3 cm at the core's 0.3 m/s (seen: 3.04 cm under a loaded make test). One tick and 5 mm.
+    tick_m = 0.3 / 10.0
+    assert abs(graph['x'] - episode.final_pose[0]) < tick_m + 0.005, (graph, episode.final_pose, logs)
     assert 'mode CREEPING -> HALTED: return' in logs or 'HALTED' in logs
