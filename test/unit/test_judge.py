@@ -16,6 +16,8 @@ def drive(judge, track, dt=0.1):
     """Feed ``track``: a list of (x, speed, command, mode) per period; returns the verdict at the end."""
     t = 0.0
     for x, speed, command, mode in track:
+        if command is not None:
+            judge.on_command()
         if judge.due(t) and judge.observe(t, x, 0.0, 0.0, speed, 0.0, command, mode):
             break
         t += dt
@@ -28,7 +30,7 @@ def test_a_robot_at_rest_for_the_hold_is_stopped_from_when_it_came_to_rest():
     resting = [(1.0, 0.0, (0.0, 0.0), None)] * 20
     verdict = drive(judge, moving + resting)
     assert verdict.outcome == 'stopped' and verdict.time_s == pytest.approx(1.0)
-    assert verdict.path_m == pytest.approx(1.0) and verdict.commands == 0
+    assert verdict.path_m == pytest.approx(1.0) and verdict.commands == 21
 
 
 def test_a_zero_command_is_needed_for_rest_and_no_command_counts_as_zero():
@@ -113,3 +115,22 @@ def test_the_episode_launch_file_passes_the_args_and_sets_no_substitution_from_d
     assert [(a.get('name'), a.get('value')) for a in include.findall('arg')] == [('speed', '0.4')]
     with pytest.raises(EpisodeError, match='verdict_file'):
         graph_episode.launch_text(spec, prepare(spec), str(tmp_path / '$(env HOME)'))
+
+
+def test_a_robot_no_command_has_reached_yet_is_not_stopped_before_the_first_command_wait():
+    """A graph's controller answering its first scan late (seen: 1.3 simulated s at real_time_factor 8 on a
+    loaded machine) is not judged 'stopped, no command' meanwhile; a silent one still is, once the wait is over."""
+    judge = Judge(JudgeSettings(first_command_wait=3.0, time_limit=4.0))
+    t = 0.0
+    for step in range(45):                      # no command for 1.5 s (at rest), then driving at 0.5 m/s
+        command = None if step < 15 else (0.5, 0.0)
+        if command is not None:
+            judge.on_command()
+        if judge.due(t) and judge.observe(t, 0.0, 0.0, 0.0, 0.0 if command is None else 0.5, 0.0, command, None):
+            break
+        t += 0.1
+    verdict = judge.verdict(t)
+    assert verdict.outcome == 'timed_out' and verdict.commands > 0, verdict
+    silent = drive(Judge(JudgeSettings(first_command_wait=3.0)), [(0.0, 0.0, None, None)] * 60)
+    assert silent.outcome == 'stopped' and silent.why.endswith('no command ever reached the base')
+    assert silent.time_s == 0.0            # at rest from the start: the wait delays the verdict, not its time

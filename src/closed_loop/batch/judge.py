@@ -40,6 +40,9 @@ class JudgeSettings:
     rest_yaw_rate: float = param(0.01, 'rad/s', 'at rest: ground-truth yaw rate under this', minimum=0.0,
                                  exclusive_minimum=True)
     rest_hold: float = param(1.0, 's', 'at rest this long ends the scenario (see end_at_rest)', minimum=0.0)
+    first_command_wait: float = param(3.0, 's', 'a robot no command has reached yet is not judged at rest before '
+                                      "this simulated time (a graph's controller may answer its first scan late "
+                                      'at a high real_time_factor)', minimum=0.0)
     end_at_rest: bool = param(True, '', 'true: at rest for rest_hold anywhere ends it (stopped); false: only '
                               'within success_radius of the goal (a navigator that waits and goes on)')
     end_on_contact: bool = param(False, '', 'end at the first contact (outcome collided)')
@@ -192,7 +195,7 @@ class Judge:
         if self.mode in (REACHED, FAILED) and at_rest:
             self._end(t_s)
         elif self._rest_since is not None and t_s - self._rest_since >= s.rest_hold - 1e-9 \
-                and (near_goal or s.end_at_rest):
+                and (near_goal or s.end_at_rest) and (self.commands or t_s >= s.first_command_wait - 1e-9):
             self._rest_end = True
             self._end(self._rest_since)
         elif t_s >= s.time_limit - 1e-9:
