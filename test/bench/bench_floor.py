@@ -32,7 +32,7 @@ TARGET_RATIO, TARGET_CLUTTER_SPEED = 1.5, 40.0
 
 def floor_cpu_per_s(world, profile):
     """CPU s per simulated s of stepping ``world`` (a World) with ``profile``'s robot, nothing else."""
-    rig = Rig(world, dict(camera=False), profile.urdf)
+    rig = Rig(world, dict(profile.node_params('sim'), camera=False), profile.urdf)
     try:
         steps = int(round(FLOOR_S / rig.sim.dt_s))
         for _ in range(50):
