@@ -33,6 +33,10 @@ class KillSim(unittest.TestCase):
         scans = []
         rospy.Subscriber('scan', LaserScan, lambda m: scans.append(time.monotonic()), queue_size=100)
         truth.wait(predicate=lambda m: m.twist.twist.linear.x > 0.3)
+        # The ground truth's subscription may connect before the command's: wait for a driving command too.
+        deadline = time.monotonic() + harness.WAIT_FOR_TOPIC_S
+        while not (cmds and cmds[-1][1] > 0.3) and time.monotonic() < deadline:
+            time.sleep(0.01)
         self.assertTrue(cmds and cmds[-1][1] > 0.3, 'the controller was not driving')
         killed_at = time.monotonic()
         rosnode.kill_nodes(['/sim'])
