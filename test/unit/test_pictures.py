@@ -1,4 +1,5 @@
 """An episode's picture, its track, a sweep's page and the report choices of a sweep file."""
+import dataclasses
 import io
 import math
 import types
@@ -97,6 +98,16 @@ def test_the_page_escapes_what_it_shows_and_loads_nothing_from_elsewhere(tmp_pat
     assert 'Not as meant (1)' in text
 
 
+def test_a_graph_rerun_may_end_two_lidar_periods_of_its_top_speed_apart(crashed):
+    spec, result = crashed
+    top = max(abs(row[4]) for row in result.trajectory)
+    assert top > 0.4
+    assert rerun.graph_tolerance_m(result, 0.1) == pytest.approx(0.2 * top)
+    assert rerun.graph_tolerance_m(dataclasses.replace(result, trajectory=[]), 0.1) == rerun.GRAPH_TOLERANCE_M
+    assert rerun.scan_period_s(spec) == pytest.approx(0.1)
+    assert rerun.scan_period_s(dataclasses.replace(spec, sim={'scan_rate_hz': 20.0})) == pytest.approx(0.05)
+
+
 @pytest.mark.parametrize('report, message', [
     ({'pictures': 'some'}, 'report.pictures: expected one of failures, all, none'),
     ({'max_pictures': -1}, 'report.max_pictures: expected a whole number >= 0'),
@@ -114,6 +125,9 @@ def test_a_rerun_is_held_to_the_row_to_the_bit(crashed):
     assert rerun.differences(row, result) == []
     row['final_x'] = repr(result.final_pose[0] + 1e-12)
     assert 'final pose' in rerun.differences(row, result)[0]
-    assert rerun.differences(row, result, graph=True) == []
+    assert rerun.differences(row, result, graph_tolerance_m=0.03) == []
+    row['final_x'] = repr(result.final_pose[0] + 0.05)
+    assert 'more than the 0.030 m' in rerun.differences(row, result, graph_tolerance_m=0.03)[0]
+    assert rerun.differences(row, result, graph_tolerance_m=0.06) == []
     out = io.StringIO()
     assert not rerun.report_differences(3, ['outcome x'], out) and 'did NOT reproduce' in out.getvalue()

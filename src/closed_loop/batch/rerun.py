@@ -3,7 +3,8 @@ INDEX``) or to write it as a bag (``rosrun closed_loop episode_bag``, ``closed_l
 
 An in-process episode is deterministic: the re-run must give the row's outcome and final pose to the bit,
 and :func:`differences` says where it did not. A graph episode runs on its own processes and clock: its
-re-run is held to the same outcome and a final pose within :data:`GRAPH_TOLERANCE_M`. Free of ROS.
+re-run is held to the same outcome and contacts, and a final position within :func:`graph_tolerance_m`.
+Free of ROS.
 """
 import argparse
 import dataclasses
@@ -15,9 +16,24 @@ import sys
 from closed_loop.batch import sweep, sweep_report
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, run_episode
 from closed_loop.batch.pictures import episode_picture
+from closed_loop.sim.profiles import load_profile
+from closed_loop.sim.sensors.lidar import LidarSettings
 
-#: How close a graph episode's re-run must end to its row (m): the agreement measured between graph runs.
+#: How close a graph episode's re-run must end to its row (m), at least: the agreement measured between graph
+#: runs of this package's controllers, whose first decision is taken on the first scan.
 GRAPH_TOLERANCE_M = 0.03
+#: ... and the LIDAR periods of travel at the robot's top speed the re-run may end apart (see graph_tolerance_m).
+GRAPH_TOLERANCE_PERIODS = 2
+
+
+def graph_tolerance_m(result, scan_period_s):
+    """How far (m) a graph episode's re-run may end from its row: a controller's timer phase against the
+    simulator's scans is whatever its node's start-up made it, so a stop decided on a tick falls up to a scan
+    period (the reading's age) plus a timer period (the tick) later in one run than in another; that is
+    GRAPH_TOLERANCE_PERIODS LIDAR periods of travel at the top speed the re-run's track shows (a controller's
+    rate taken as the LIDAR's), and never less than GRAPH_TOLERANCE_M."""
+    top = max((abs(row[4]) for row in result.trajectory or ()), default=0.0)
+    return max(GRAPH_TOLERANCE_M, GRAPH_TOLERANCE_PERIODS * scan_period_s * top)
 
 
 class RerunError(ValueError):
@@ -49,12 +65,21 @@ def rerun(output, index, tap=None, logs=None, bag=None):
         result = run_episode(dataclasses.replace(spec, keep_trajectory=True), {}, logs, tap, bag)
     except EpisodeError as error:
         raise RerunError('row %s: %s' % (index, error))
-    return row, spec, result, differences(row, result, graph=isinstance(spec.controller, dict))
+    tolerance = graph_tolerance_m(result, scan_period_s(spec)) if isinstance(spec.controller, dict) else None
+    return row, spec, result, differences(row, result, tolerance)
 
 
-def differences(row, result, graph=False):
+def scan_period_s(spec):
+    """The LIDAR period (s) of ``spec``'s robot: its profile's, or the spec's own sim override."""
+    rate = dict(load_profile(spec.robot).node_params('sim'), **spec.sim).get('scan_rate_hz',
+                                                                           LidarSettings().scan_rate_hz)
+    return 1.0 / rate
+
+
+def differences(row, result, graph_tolerance_m=None):
     """How ``result`` differs from the sweep's ``row``: [] when it reproduces it (the outcome and the contacts
-    the same; the final pose to the bit, or for a graph episode within GRAPH_TOLERANCE_M)."""
+    the same; the final pose to the bit, or for a graph episode, whose ``graph_tolerance_m`` is given, within
+    that distance)."""
     found = []
     for name, value in (('outcome', result.outcome), ('contacts', str(result.contacts))):
         if row.get(name) != str(value):
@@ -64,10 +89,11 @@ def differences(row, result, graph=False):
         was = tuple(float(row[k]) for k in ('final_x', 'final_y', 'final_yaw'))
     except (KeyError, ValueError):
         return found + ['the row has no final pose']
-    if graph:
+    if graph_tolerance_m is not None:
         off = math.hypot(pose[0] - was[0], pose[1] - was[1])
-        if off > GRAPH_TOLERANCE_M:
-            found.append('final position %.3f m from the row\'s (%.3f, %.3f)' % (off, was[0], was[1]))
+        if off > graph_tolerance_m:
+            found.append('final position %.3f m from the row\'s (%.3f, %.3f), more than the %.3f m two runs of a '
+                         'graph may differ by' % (off, was[0], was[1], graph_tolerance_m))
     elif tuple(pose) != was:
         found.append('final pose (%r, %r, %r), the row says (%r, %r, %r)' % (tuple(pose) + was))
     return found
