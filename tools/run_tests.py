@@ -6,11 +6,12 @@ Usage (inside ``source env.sh``; ``make test`` does that):
 
 Unit tests (test/unit) need no master. System tests (test/system) start real ROS processes outside
 rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces -- and need root.
-Rostest files each get the master rostest starts on a free port. First roslaunch-check on every launch file,
-then the rostest files that measure rates or wall time, change a node while it runs, or start rviz (ALONE),
-one at a time; then the unit tests, every system test file and every other rostest file, SIDE_BY_SIDE at a
-time (the system test files that sweep graph episodes first, and never two of them at once), each with its
-own output in test_output/ (printed when it fails).
+Rostest files each get the master rostest starts on a free port. First roslaunch-check on every launch file;
+then two things at once: the rostest files that measure rates or wall time or change a node while it runs
+(ALONE) one at a time, at the normal CPU priority, and beside them the unit tests, every system test file and
+every other rostest file, SIDE_BY_SIDE at a time, at the lowest CPU priority (nice BESIDE_NICENESS), so that
+they take only the CPU the ALONE file leaves (the system test files that sweep graph episodes first, and never
+two of them at once). Each has its own output in test_output/ (printed when it fails).
 
 Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed``
 (pytest and rostest counted together); the exit status is non-zero if anything failed or nothing ran.
@@ -77,19 +78,27 @@ def run_launch_checks(args):
     return passed, failed, 0, names
 
 
-#: Jobs that measure rates or wall time, change a node while it runs, or start rviz, run alone; every other job (a system test file, a
-#: rostest judged on simulated time and ground truth) runs two at a time, each rostest with the master
-#: rostest starts on a free port and its own ROS_HOME and logs, each system test on its own free ports.
-ALONE = ('sim_wall', 'loop_wall', 'loop_fast', 'kill_controller', 'kill_sim', 'rviz_display', 'reconfigure',
-         'episode_agreement')
+#: Jobs that measure rates or wall time, or change a node while it runs, run one at a time at the normal CPU
+#: priority; every other job (a system test file, a rostest judged on simulated time and ground truth) runs
+#: SIDE_BY_SIDE at a time beside them, at niceness BESIDE_NICENESS, each rostest with the master rostest
+#: starts on a free port and its own ROS_HOME and logs, each system test on its own free ports.
+ALONE = ('sim_wall', 'loop_wall', 'loop_fast', 'kill_controller', 'kill_sim', 'reconfigure')
 SIDE_BY_SIDE = 3
+#: The jobs beside the ALONE ones take only the CPU those leave: a process at niceness 19 weighs 15 against
+#: the 1024 of one at 0 (Linux's CFS), so an ALONE file's nodes run when they wake as on an idle machine.
+BESIDE_NICENESS = 19
 #: System test files that run sweeps of graph episodes (two graphs at once each): they start first, and never
 #: two of them at the same time, so that the machine is not asked for six graphs at once.
 GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreement', 'test_failure_report')
 
 
-def run_rostest_file(path, results_dir):
-    """Run one rostest file; returns (passed, failed, skipped, failed names, what to print)."""
+def lower_priority(niceness):
+    """A preexec_fn that runs a child (and so all its descendants) at ``niceness``; None for the normal one."""
+    return (lambda: os.nice(niceness)) if niceness else None
+
+
+def run_rostest_file(path, results_dir, niceness=0):
+    """Run one rostest file (at ``niceness``); returns (passed, failed, skipped, failed names, what to print)."""
     name = os.path.splitext(os.path.basename(path))[0]
     log = os.path.join(results_dir, name + '.log')
     # Each file gets a results folder of its own: rosunit names its files after test-name only.
@@ -102,7 +111,7 @@ def run_rostest_file(path, results_dir):
     with open(log, 'w') as out:
         try:
             code = subprocess.call(cmd, stdout=out, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
-                                   timeout=ROSTEST_HANG_LIMIT_S)
+                                   timeout=ROSTEST_HANG_LIMIT_S, preexec_fn=lower_priority(niceness))
         except subprocess.TimeoutExpired:
             code = 'timeout'
     p = f = s = 0
@@ -129,9 +138,9 @@ def run_rostest_file(path, results_dir):
     return p, f, s, names, text
 
 
-def run_pytest(path, results_dir, select=None):
-    """pytest on a file of test/system or on test/unit (``select``: its -k); returns (passed, failed, skipped,
-    failed names, what to print)."""
+def run_pytest(path, results_dir, select=None, niceness=0):
+    """pytest on a file of test/system or on test/unit (``select``: its -k), at ``niceness``; returns (passed,
+    failed, skipped, failed names, what to print)."""
     name = os.path.splitext(os.path.basename(path))[0]
     xml = os.path.join(results_dir, name + '.xml')
     log = os.path.join(results_dir, name + '.log')
@@ -139,7 +148,7 @@ def run_pytest(path, results_dir, select=None):
     with open(log, 'w') as out:
         code = subprocess.call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider',
                                 '--junitxml', xml] + (['-k', select] if select else []),
-                               stdout=out, stderr=subprocess.STDOUT, cwd=ROOT)
+                               stdout=out, stderr=subprocess.STDOUT, cwd=ROOT, preexec_fn=lower_priority(niceness))
     p, f, s, names = count_junit(xml) if os.path.exists(xml) else (0, 0, 0, [])
     if code not in (0, 5) and f == 0:
         f, names = 1, ['%s (pytest exit %d, see %s)' % (name, code, log)]
@@ -151,8 +160,8 @@ def run_pytest(path, results_dir, select=None):
 
 
 def run_all(args):
-    """The unit tests, the system test files and the rostest files: the ones in ALONE one at a time, then the
-    rest SIDE_BY_SIDE at a time."""
+    """The unit tests, the system test files and the rostest files: the ones in ALONE one at a time, and beside
+    them the rest SIDE_BY_SIDE at a time at niceness BESIDE_NICENESS."""
     jobs = []
     if not args.rostest_only:
         unit = functools.partial(run_pytest, select=args.k)
@@ -168,28 +177,37 @@ def run_all(args):
     for _, _, folder in jobs:
         os.makedirs(folder, exist_ok=True)
     totals = [0, 0, 0, []]
+    lock = threading.Lock()
 
     def count(result):
         p, f, s, names, text = result
-        print(text, flush=True)
-        totals[0] += p
-        totals[1] += f
-        totals[2] += s
-        totals[3] += names
+        with lock:
+            print(text, flush=True)
+            totals[0] += p
+            totals[1] += f
+            totals[2] += s
+            totals[3] += names
     alone = [j for j in jobs if os.path.splitext(os.path.basename(j[0]))[0] in ALONE]
-    together = [j for j in jobs if j not in alone]
-    for path, run, folder in alone:
-        count(run(path, folder))
-    if together:
-        print('== %d jobs (unit tests, system test files, rostest files), %d at a time'
-              % (len(together), SIDE_BY_SIDE), flush=True)
-        run_side_by_side(together, count)
+    beside = [j for j in jobs if j not in alone]
+    print('== %d jobs one at a time, and beside them %d jobs (unit tests, system test files, rostest files) %d at '
+          'a time at niceness %d' % (len(alone), len(beside), SIDE_BY_SIDE, BESIDE_NICENESS), flush=True)
+
+    def alone_lane():
+        for path, run, folder in alone:
+            count(run(path, folder))
+    lanes = [threading.Thread(target=alone_lane)]
+    lanes += side_by_side_lanes(beside, count, BESIDE_NICENESS)
+    for thread in lanes:
+        thread.start()
+    for thread in lanes:
+        thread.join()
     return tuple(totals)
 
 
-def run_side_by_side(jobs, count):
-    """Run ``jobs`` SIDE_BY_SIDE at a time, handing each result to ``count``: the GRAPH_SWEEPS files first and
-    one at a time (a lane that would start a second one takes the next other job instead)."""
+def side_by_side_lanes(jobs, count, niceness):
+    """SIDE_BY_SIDE threads (not started) that run ``jobs`` at ``niceness``, handing each result to ``count``:
+    the GRAPH_SWEEPS files first and one at a time (a lane that would start a second one takes the next other
+    job instead)."""
     def heavy(job):
         return os.path.splitext(os.path.basename(job[0]))[0] in GRAPH_SWEEPS
     waiting = sorted(jobs, key=lambda job: not heavy(job))
@@ -206,17 +224,12 @@ def run_side_by_side(jobs, count):
                 running_heavy[0] = running_heavy[0] or heavy(job)
             path, run, folder = job
             try:
-                result = run(path, folder)
+                result = run(path, folder, niceness=niceness)
             finally:
                 with lock:
                     running_heavy[0] = running_heavy[0] and not heavy(job)
-            with lock:
-                count(result)
-    lanes = [threading.Thread(target=lane) for _ in range(SIDE_BY_SIDE)]
-    for thread in lanes:
-        thread.start()
-    for thread in lanes:
-        thread.join()
+            count(result)
+    return [threading.Thread(target=lane) for _ in range(SIDE_BY_SIDE)]
 
 
 def main():
