@@ -3,7 +3,7 @@ stepped in lockstep, deterministic, free of ROS; for benchmarks and batches of s
 (``closed_loop.batch.sweep``).
 
 An :class:`EpisodeSpec` names everything an episode depends on: the world (a shipped name, a file, or
-``{'generator': ClutterSettings fields}``), the robot profile, the controller and its settings (checked by
+``{'generator': {...}}``, ``closed_loop.sim.generators``), the robot profile, the controller and its settings (checked by
 the settings class its node uses), the LIDAR's noise and seed, the goal, the time limit. :func:`run_episode`
 gives an :class:`EpisodeResult`; the same spec gives the same result and trajectory, bit for bit, in any
 process (nothing in it reads a clock, and the noise has its own seeded generator).
@@ -26,7 +26,7 @@ import dataclasses
 import math
 from typing import Optional
 
-from closed_loop.sim import clutter
+from closed_loop.sim import generators
 from closed_loop.controllers import ControllerError, controller_class, controller_classes
 from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
 from closed_loop.batch.judge import JudgeSettings, Verdict
@@ -46,7 +46,7 @@ class EpisodeError(ValueError):
 @dataclasses.dataclass(frozen=True)
 class EpisodeSpec:
     """Everything one episode depends on. ``world``: a world name, a world file, or ``{'generator': {...}}``
-    (``closed_loop.sim.clutter.ClutterSettings`` fields); ``robot``: a profile name; ``controller``: a
+    (``closed_loop.sim.generators``: a method and its settings); ``robot``: a profile name; ``controller``: a
     controller name; ``settings``: its ``~parameters`` over the profile's; ``sim``: the simulator's and its
     sensors' over the profile's; ``scan_noise``: the LIDAR's noise (m, std) and ``seed`` its seed;
     ``goal``: (x, y) in the world frame for a controller that takes one (default: the world's ``goal:``,
@@ -110,19 +110,21 @@ class EpisodeResult(Verdict):
 def load_episode_world(spec_world, profile):
     """The :class:`closed_loop.sim.world.World` a spec's ``world`` names."""
     if isinstance(spec_world, dict):
-        if set(spec_world) != {'generator'} or not isinstance(spec_world['generator'], dict):
-            raise EpisodeError("world: expected a world name, a file, or {'generator': {...}}, got %s"
-                               % (quote(spec_world),))
-        try:
-            settings = clutter.ClutterSettings(**dict({'profile': profile.name}, **spec_world['generator']))
-        except TypeError as error:
-            raise EpisodeError('world.generator: %s' % error)
-        try:
-            raw = clutter.generate(settings.check(), load_profile(settings.profile))
-        except clutter.ClutterError as error:
-            raise EpisodeError('world.generator.%s' % error)
+        raw = generated_world(spec_world, profile)
         return parse_world(raw, raw['name'], footprint=profile.footprint)
     return load_world(resolve_world(spec_world, '%s/worlds' % PACKAGE_ROOT), footprint=profile.footprint)
+
+
+def generated_world(spec_world, profile):
+    """The world dict of a spec's ``{'generator': {...}}`` (``closed_loop.sim.generators``) for ``profile``."""
+    if set(spec_world) != {'generator'} or not isinstance(spec_world['generator'], dict):
+        raise EpisodeError("world: expected a world name, a file, or {'generator': {...}}, got %s"
+                           % (quote(spec_world),))
+    try:
+        settings = generators.settings_from(spec_world['generator'], profile.name)
+        return generators.generate(settings, profile if settings.profile == profile.name else None)
+    except generators.GeneratorError as error:
+        raise EpisodeError('world.generator.%s' % error)
 
 
 def controller_settings(cls, values):

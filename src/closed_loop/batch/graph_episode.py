@@ -24,9 +24,8 @@ from xml.sax.saxutils import quoteattr
 import yaml
 
 from closed_loop.batch import graph_keeper
-from closed_loop.batch.episode import EpisodeError, judge_settings, result_from_verdict
+from closed_loop.batch.episode import EpisodeError, generated_world, judge_settings, result_from_verdict
 from closed_loop.batch.judge import Verdict, track_from_dict
-from closed_loop.sim import clutter
 from closed_loop.yaml_check import quote
 
 #: Simulated s per wall s in a graph episode, unless the spec says: the fastest at which a graph episode
@@ -104,9 +103,8 @@ def launch_text(spec, prepared, folder, bag=None):
     world = spec.world
     if isinstance(world, dict):                                     # a generated world: a file of its own
         world = os.path.join(folder, 'world.yaml')
-        settings = clutter.ClutterSettings(**dict({'profile': p.profile.name}, **spec.world['generator']))
         with open(world, 'w') as f:
-            yaml.safe_dump(clutter.generate(settings.check(), p.profile), f, sort_keys=False)
+            yaml.safe_dump(generated_world(spec.world, p.profile), f, sort_keys=False)
     elif os.path.isfile(world):
         world = os.path.abspath(world)
     judge = judge_settings(spec, p.controller_class)

@@ -19,8 +19,8 @@ runs. Free of ROS.
 A grid key is an EpisodeSpec field (``world``, ``robot``, ``controller``, ``seed``, ``scan_noise``,
 ``goal``, ``time_limit_s``, ...), or ``settings.NAME`` (a controller ``~parameter``), ``sim.NAME`` (a
 simulator or sensor ``~parameter``), ``args.NAME`` (an arg of a graph controller's launch file,
-``controller: {launch: PKG/path.launch}``) or ``world.generator.NAME`` (a
-``closed_loop.sim.clutter.ClutterSettings`` field). Its values are a list, or ``{from, to, step}`` (both ends
+``controller: {launch: PKG/path.launch}``) or ``world.generator.NAME`` (a generated world's ``method`` or
+setting, ``closed_loop.sim.generators``). Its values are a list, or ``{from, to, step}`` (both ends
 included). Each distinct value of each key is then checked as an episode would be (the controller's settings
 by the class its node uses, the world loaded or its generator's settings checked), and every combination of
 a grid of at most :data:`CHECK_ALL`; the first problem is an error that names the file, the field and what

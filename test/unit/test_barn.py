@@ -1,0 +1,161 @@
+"""BARN-method worlds (closed_loop.sim.barn), the footprint lattice that guarantees their way
+(closed_loop.lattice), their difficulty metrics, and the generators' table and command."""
+import math
+import os
+from types import SimpleNamespace
+
+import numpy
+import pytest
+import yaml
+
+from closed_loop.batch.episode import EpisodeError, EpisodeSpec, load_episode_world
+from closed_loop.lattice import FootprintLattice
+from closed_loop.sim import barn, barn_metrics, generators
+from closed_loop.sim.profiles import load_profile
+from closed_loop.sim.world import load_world
+
+JACKAL = load_profile('jackal')
+CELL = 0.05
+# A 0.5 x 0.4 m robot (turning circle 0.64 m across): it fits a 0.45 m corridor only lengthwise.
+ROBOT = SimpleNamespace(x_min=-0.25, x_max=0.25, y_min=-0.2, y_max=0.2)
+
+
+def corridor_grid(half, bend):
+    """Walls of occupied cells (obstacles 0.05 m across) round a corridor 2 ``half`` + 1 cells wide between their
+    surfaces: along +x, then (``bend``) turning to +y."""
+    grid = numpy.ones((120, 120), bool)
+    grid[60 - half:60 + half + 1, 0:60 + half + 1] = False           # along +x, to column 60
+    if bend:
+        grid[60 - half:120, 60 - half:60 + half + 1] = False         # then along +y
+    else:
+        grid[60 - half:60 + half + 1, :] = False
+    return grid
+
+
+def lattice(grid, margin=0.0):
+    return FootprintLattice(grid, CELL, ROBOT, margin, 0.5 * CELL)
+
+
+def test_a_corridor_narrower_than_the_turning_circle_is_passed_straight_but_not_round_a_bend():
+    straight = lattice(corridor_grid(4, bend=False))
+    goal = numpy.zeros((120, 120), bool)
+    goal[60, 110] = True
+    assert straight.reachable((60, 10, 0), goal)
+    assert not straight.free[2, 60, 30]                      # it cannot stand across the corridor
+    bend = lattice(corridor_grid(4, bend=True))
+    up = numpy.zeros((120, 120), bool)
+    up[110, 60] = True
+    assert not bend.reachable((60, 10, 0), up)               # no room to turn at the corner
+    roomy = corridor_grid(4, bend=True)
+    roomy[45:76, 45:76] = False                              # a room at the corner, wider than the circle
+    assert lattice(roomy).reachable((60, 10, 0), up)
+
+
+def test_a_turn_is_refused_where_only_its_sweep_meets_an_obstacle():
+    grid = numpy.zeros((80, 80), bool)
+    # A post on the 22.5-degree line through a corner of the rectangle: clear of it at 0 and at 45 degrees.
+    corner = math.hypot(0.25, 0.2)
+    angle = math.atan2(0.2, 0.25) + math.radians(22.5)
+    i, j = 40 + int(round(corner * math.sin(angle) / CELL)), 40 + int(round(corner * math.cos(angle) / CELL))
+    grid[i, j] = True
+    here = lattice(grid)
+    assert here.free[0, 40, 40] and here.free[1, 40, 40]
+    assert not here.turn[0, 40, 40]
+
+
+def test_the_shortest_way_goes_round_a_block_and_is_no_shorter_than_the_straight_line():
+    grid = numpy.zeros((100, 200), bool)
+    grid[30:70, 95:105] = True                                # a block on the line
+    goal = numpy.zeros((100, 200), bool)
+    goal[50, 190] = True
+    length, path = lattice(grid).shortest((50, 10, 0), goal)
+    assert path[0] == (50, 10, 0) and path[-1][:2] == (50, 190)
+    assert 180 * CELL < length < 180 * CELL * 1.5
+    ys = [i for i, _, _ in path]
+    assert max(abs(i - 50) for i in ys) > 20                   # round the block
+    open_length, _ = lattice(numpy.zeros((100, 200), bool)).shortest((50, 10, 0), goal)
+    assert open_length == pytest.approx(180 * CELL)
+    assert lattice(grid).shortest((50, 10, 0), numpy.zeros((100, 200), bool)) == (math.inf, [])
+
+
+def barn_settings(**values):
+    return generators.settings_from(dict({'method': 'barn'}, **values), 'jackal')
+
+
+def test_a_barn_world_is_the_same_for_the_same_seed_and_has_its_way():
+    settings = barn_settings(seed=3, fill=0.45, smoothing=3)
+    world = barn.generate(settings, JACKAL)
+    assert world == barn.generate(settings, JACKAL)
+    assert world != barn.generate(barn_settings(seed=4, fill=0.45, smoothing=3), JACKAL)
+    posts = [o for o in world['obstacles'] if o['type'] == 'cylinder']
+    assert 150 < len(posts) < 450 and all(o['radius'] == 0.075 for o in posts)
+    field = barn.field_of_world(settings, world)
+    length, poses = barn.way_length(settings, field, JACKAL)
+    assert 9.5 < length < 14.0 and math.hypot(poses[-1][0] - 10.0, poses[-1][1]) <= 0.2
+    load_world_ok = load_episode_world({'generator': {'method': 'barn', 'seed': 3, 'fill': 0.45, 'smoothing': 3}},
+                                       JACKAL)
+    assert len(load_world_ok.obstacles) == len(world['obstacles']) and load_world_ok.goal == (10.0, 0.0)
+
+
+def test_the_field_drawn_again_when_it_leaves_no_way():
+    settings = barn_settings(seed=0, fill=0.5, smoothing=3)
+    field, attempt = barn.field_with_way(settings, JACKAL)
+    assert attempt > 0
+    layout = barn.Layout(settings)
+    for earlier in range(attempt):
+        blocked = barn.automaton(settings, numpy.random.default_rng([settings.seed, earlier]))
+        grid, offset = layout.lattice(blocked, JACKAL)
+        assert not grid.reachable(layout.start_state(offset), layout.goal_mask(offset))
+    with pytest.raises(barn.BarnError, match='expected a lower fill'):
+        barn.generate(barn_settings(seed=0, fill=0.9, smoothing=0), JACKAL)
+
+
+@pytest.mark.parametrize('values, message', [
+    ({'fill': 1.5}, 'fill: expected a number from 0 to 0.9'),
+    ({'smoothing': -1}, 'smoothing: expected a whole number'),
+    ({'goal_distance': 5.0}, 'goal_distance: expected at least 1 m beyond the field'),
+    ({'fill_ratio': 0.3}, 'fill_ratio: not a setting of the barn generator'),
+    ({'method': 'maze'}, 'method: expected one of corridor, barn'),
+])
+def test_bad_generator_settings_name_the_field(values, message):
+    with pytest.raises(generators.GeneratorError, match=message):
+        generators.settings_from(dict({'method': 'barn'}, **values), 'jackal')
+    with pytest.raises(EpisodeError, match='world.generator.' + message.split(':')[0]):
+        load_episode_world({'generator': dict({'method': 'barn'}, **values)}, JACKAL)
+
+
+def test_the_metrics_rank_a_sparse_field_easier_than_a_dense_one():
+    sparse_settings, dense_settings = barn_settings(seed=0, fill=0.4, smoothing=2), barn_settings(seed=2, fill=0.5,
+                                                                                                     smoothing=4)
+    sparse = barn_metrics.metrics(sparse_settings, barn.generate(sparse_settings, JACKAL), JACKAL)
+    dense = barn_metrics.metrics(dense_settings, barn.generate(dense_settings, JACKAL), JACKAL)
+    assert sparse.visibility_m > dense.visibility_m and sparse.characteristic_m > dense.characteristic_m
+    assert sparse.closest_m > dense.closest_m
+    assert 1.0 <= sparse.tortuosity and 1.0 <= dense.tortuosity
+    assert sparse.way_m == pytest.approx(sparse.tortuosity * math.hypot(*sparse_path_span(sparse_settings)))
+
+
+def sparse_path_span(settings):
+    _, poses = barn.way_length(settings, barn.field_of_world(settings, barn.generate(settings, JACKAL)), JACKAL)
+    return poses[-1][0] - poses[0][0], poses[-1][1] - poses[0][1]
+
+
+def test_a_generated_world_is_made_once_and_handed_out_as_copies():
+    settings = barn_settings(seed=5, fill=0.42, smoothing=3)
+    first = generators.generate(settings, JACKAL)
+    first['obstacles'].clear()
+    assert generators.generate(settings, JACKAL)['obstacles']
+
+
+def test_the_command_writes_barn_worlds_with_their_metrics(tmp_path):
+    args = ['--method', 'barn', '--output', str(tmp_path), '--seed', '7', '--seeds', '2', '--fill', '0.42']
+    assert generators.main(args) == 0
+    files = sorted(os.listdir(tmp_path))
+    assert files == ['barn_jackal_f042_m2_s7.yaml', 'barn_jackal_f042_m2_s8.yaml']
+    text = open(os.path.join(tmp_path, files[0])).read()
+    assert '--method barn' in text and '--seed 7' in text and '# BARN difficulty metrics' in text
+    assert 'tortuosity' in text and 'characteristic dimension' in text
+    world = load_world(os.path.join(tmp_path, files[0]), footprint=JACKAL.footprint)
+    assert world.goal == (10.0, 0.0) and yaml.safe_load(text)['name'] == files[0][:-5]
+    spec = EpisodeSpec(world=os.path.join(tmp_path, files[0]), robot='jackal', controller='avoid_obstacles')
+    assert spec.world.endswith('.yaml')
