@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""The planar caster's scan among 300 posts (720 rays, as the Jackal's LIDAR), culled by angular window against
-every ray on every post; and how fast a sweep file of a million combinations is checked and ready to start.
+"""The planar caster's scan among 300 posts (720 rays, as the Jackal's LIDAR), culled by angular window (found by
+arithmetic for the LIDAR's fan, or by search in sorted bearings) against every ray on every post, from the middle
+of 300 posts scattered over 20 x 20 m and from inside a BARN-method field (315 posts and two side walls); and how
+fast a sweep file of a million combinations is checked and ready to start.
 
     python3 test/bench/bench_rays.py
 
@@ -47,28 +49,41 @@ def posts(seed=1):
     return parse_world({'name': 'posts', 'robot': {'start': {'x': 0.0, 'y': 0.0, 'yaw': 0.0}}, 'obstacles': found})
 
 
-def per_scan_ms(caster, centres, dirs, cull, repeats):
-    caster.cast(centres, (0.0, 0.0, 0.2), dirs, RANGE_M, cull)
+def per_scan_ms(caster, origin, dirs, repeats, **how):
+    caster.cast(None, origin, dirs, RANGE_M, **how)
     started = time.process_time()
     for _ in range(repeats):
-        caster.cast(centres, (0.0, 0.0, 0.2), dirs, RANGE_M, cull)
+        caster.cast(None, origin, dirs, RANGE_M, **how)
     return (time.process_time() - started) / repeats * 1e3
 
 
+def barn_field():
+    from closed_loop.sim import generators
+    from closed_loop.sim.profiles import load_profile
+    profile = load_profile('jackal')
+    settings = generators.settings_from({'method': 'barn', 'seed': 2, 'fill': 0.45, 'smoothing': 2}, 'jackal')
+    return parse_world(generators.generate(settings, profile), 'barn', footprint=profile.footprint)
+
+
 def main():
-    world = posts()
-    caster = PlanarRays(world.obstacles)
-    centres = numpy.array([o.position for o in world.obstacles])
     angles = numpy.linspace(-FIELD_RAD / 2, FIELD_RAD / 2, RAYS)
     dirs = numpy.column_stack((numpy.cos(angles), numpy.sin(angles), numpy.zeros(RAYS)))
-    culled = per_scan_ms(caster, centres, dirs, True, 2000)
-    brute = per_scan_ms(caster, centres, dirs, False, 50)
-    same = numpy.array_equal(caster.cast(centres, (0, 0, 0.2), dirs, RANGE_M),
-                             caster.cast(centres, (0, 0, 0.2), dirs, RANGE_M, cull=False))
-    print('planar caster, %d rays among %d posts (CPU per scan):' % (RAYS, POSTS))
-    print('  every ray on every post  %8.3f ms' % brute)
-    print('  culled by window         %8.3f ms   %.0fx faster; target %.2f ms (%.1fx of it); equal: %s'
-          % (culled, brute / culled, SCAN_TARGET_MS, culled / SCAN_TARGET_MS, same))
+    fan = (angles[0], angles[1] - angles[0])
+    print('planar caster, %d rays (CPU per scan):' % RAYS)
+    for label, world, origin in (('%d posts over 20 x 20 m, from the middle' % POSTS, posts(), (0.0, 0.0, 0.2)),
+                                 ('a BARN-method field, from inside it', barn_field(), (4.0, 0.3, 0.2))):
+        caster = PlanarRays(world.obstacles)
+        brute = per_scan_ms(caster, origin, dirs, 50, cull=False)
+        searched = per_scan_ms(caster, origin, dirs, 2000)
+        fanned = per_scan_ms(caster, origin, dirs, 2000, fan=fan)
+        reference = caster.cast(None, origin, dirs, RANGE_M, cull=False)
+        same = all(numpy.array_equal(caster.cast(None, origin, dirs, RANGE_M, **how), reference)
+                   for how in ({}, {'fan': fan}))
+        print('  %s (%d obstacles):' % (label, len(world.obstacles)))
+        print('    every ray on every obstacle   %8.3f ms' % brute)
+        print('    culled, windows by search     %8.3f ms' % searched)
+        print('    culled, windows by the fan    %8.3f ms   %.0fx faster than every ray; target %.2f ms (%.2fx of '
+              'it); all equal: %s' % (fanned, brute / fanned, SCAN_TARGET_MS, fanned / SCAN_TARGET_MS, same))
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, 'million.yaml')
         with open(path, 'w') as f:

@@ -140,21 +140,30 @@ def test_the_planar_caster_refuses_a_world_with_other_robots():
 
 @pytest.mark.parametrize('seed', range(2))
 def test_culling_by_angular_window_gives_the_brute_force_distances_to_the_bit(seed):
-    """Each obstacle tested only against the rays its bounding circle can cover: the same ranges as every ray
-    against every obstacle, from origins among the obstacles (inside some boxes' bounding circles), with the
-    scan's bearings wrapping past +-pi and the plane tilted."""
+    """Each obstacle tested only against the rays its bounding circle can cover, its window found by search
+    in the sorted bearings or, for a LIDAR's fan, by arithmetic: the same ranges as every ray against every
+    obstacle, from origins among the obstacles (inside some boxes' bounding circles), with the scan's bearings
+    wrapping past +-pi, partial and full turns, and the scanner pitched and rolled (a fan's bearings then stray
+    from even spacing)."""
     world = clutter(seed, count=300)
     caster = PlanarRays(world.obstacles)
     centres = numpy.array([o.position for o in world.obstacles])
     rng = numpy.random.default_rng(seed)
-    for trial in range(12):
+    for trial in range(16):
         origin = (float(rng.uniform(-6, 6)), float(rng.uniform(-6, 6)), 0.2)
-        yaw, tilt = float(rng.uniform(-math.pi, math.pi)), float(rng.choice([0.0, 0.0, 0.02, -0.03]))
+        yaw = float(rng.uniform(-math.pi, math.pi))
+        pitch, roll = (float(rng.choice([0.0, 0.0, 0.02, -0.03])) for _ in range(2))
         count = int(rng.choice([360, 720, 1081]))
-        angles = yaw + numpy.linspace(-2.35, 2.35, count)
-        level = math.cos(tilt)
-        dirs = numpy.column_stack((level * numpy.cos(angles), level * numpy.sin(angles),
-                                   numpy.full(count, math.sin(tilt))))
-        culled = caster.cast(centres, origin, dirs, 30.0)
+        full = trial % 4 == 3
+        angles = numpy.arange(count) * 2 * math.pi / count - math.pi if full else numpy.linspace(-2.35, 2.35, count)
+        flat = numpy.column_stack((numpy.cos(angles), numpy.sin(angles), numpy.zeros(count)))
+        cy, sy, cp, sp, cr, sr = (math.cos(yaw), math.sin(yaw), math.cos(pitch), math.sin(pitch), math.cos(roll),
+                                  math.sin(roll))
+        rotation = numpy.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]]) @ \
+            numpy.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]]) @ numpy.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+        dirs = flat @ rotation.T
+        fan = (math.atan2(dirs[0, 1], dirs[0, 0]), angles[1] - angles[0])
         brute = caster.cast(centres, origin, dirs, 30.0, cull=False)
-        assert numpy.array_equal(culled, brute), (seed, trial, numpy.flatnonzero(culled != brute)[:5])
+        for culled in (caster.cast(centres, origin, dirs, 30.0), caster.cast(centres, origin, dirs, 30.0, fan=fan),
+                       caster.cast(None, origin, dirs, 30.0, fan=fan)):
+            assert numpy.array_equal(culled, brute), (seed, trial, numpy.flatnonzero(culled != brute)[:5])

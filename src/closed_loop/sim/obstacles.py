@@ -1,5 +1,6 @@
-"""Where a world's obstacles are and what they cover: footprint overlaps (the start checks) and the paths
-of moving obstacles over time. Free of ROS and pybullet; obstacles are :class:`closed_loop.sim.world.Obstacle`.
+"""Where a world's obstacles are and what they cover: footprint overlaps (the start checks), the paths of
+moving obstacles over time, and the static ones grouped by area (the simulator's compound bodies). Free of ROS
+and pybullet; obstacles are :class:`closed_loop.sim.world.Obstacle`.
 """
 import functools
 import math
@@ -77,3 +78,19 @@ def point_on_path(points, cycle_m, distance_m):
         travelled -= segment
     # Rounding can leave a sliver past the last corner; the path ends where it began.
     return points[-1]
+
+
+def static_groups(obstacles, most):
+    """The static obstacles of ``obstacles`` in groups of at most ``most``, each a compact patch of the world: the
+    patch split at the median of its centres along its longer side until each part is small enough."""
+    def split(group):
+        if len(group) <= most:
+            return [group]
+        xs = [o.position[0] for o in group]
+        ys = [o.position[1] for o in group]
+        axis = 0 if max(xs) - min(xs) >= max(ys) - min(ys) else 1
+        ordered = sorted(group, key=lambda o: (o.position[axis], o.position[1 - axis], o.name))
+        half = len(ordered) // 2
+        return split(ordered[:half]) + split(ordered[half:])
+    static = [o for o in obstacles if o.motion is None]
+    return split(static) if static else []

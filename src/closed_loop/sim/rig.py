@@ -17,7 +17,8 @@ class Rig:
 
     def __init__(self, world, params=None, urdf=None):
         self.settings, sensor_settings = self.check_params(params)
-        self.sim = Simulation(world, self.settings, urdf)
+        render = any(cls.renders(settings) for cls, settings in sensor_settings.items() if settings is not None)
+        self.sim = Simulation(world, self.settings, urdf, render=render)
         self.sensors = {}
         for cls, settings in sensor_settings.items():
             sensor = cls(settings, self.sim)

@@ -194,16 +194,13 @@ class Robot:
         """The ramped twist the wheels are being driven at."""
         return self._twist
 
-    @property
-    def obstacle_ids(self):
-        """{body uid: name} of what this robot can touch or see: the obstacles and the other robots."""
-        return self.sim.solid_ids(self)
-
     def contacts_with_obstacles(self):
-        """Body uids of the obstacles (and other robots) this robot is in contact with now (not the ground)."""
-        # Every body but the ground is an obstacle or another robot (called at every physics step: no lookup).
+        """The names of the obstacles (and other robots) this robot is in contact with now (not the ground)."""
+        # Every body but the ground holds obstacles or another robot (called at every physics step: no lookup
+        # unless there is a contact).
         ground = self.sim.ground_id
-        return {c[2] for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id) if c[2] != ground}
+        return {self.sim.name_at(c[2], c[6]) for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id)
+                if c[2] != ground}
 
     def clearance(self, max_m):
         """Least distance (m) between this robot's collision shapes and any obstacle or other robot, looked
@@ -220,12 +217,16 @@ class Robot:
         for bound, uid in self.sim.obstacles_near(x, y, max_m + radius):
             if bound - radius > least:
                 break
-            least = min([least] + [c[8] for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, max_m)])
+            # Nothing farther than the least found can be the least (a compound answers for each shape within).
+            reach = min(max_m, least) if least > 0.0 else max_m
+            least = min([least] + [c[8] for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, reach)])
         return least
 
-    def within(self, uid, distance_m):
-        """True if this robot is within ``distance_m`` of body ``uid``."""
-        return bool(self._call(pybullet.getClosestPoints, self.robot_id, uid, distance_m))
+    def within(self, name, distance_m):
+        """True if this robot is within ``distance_m`` of the obstacle (or other robot) ``name``."""
+        uid = self.sim.body_of(name)
+        return any(self.sim.name_at(uid, c[6]) == name
+                   for c in self._call(pybullet.getClosestPoints, self.robot_id, uid, distance_m))
 
 
 class RobotView:
@@ -235,7 +236,7 @@ class RobotView:
 
     _ROBOT = ('model', 'settings', 'robot_id', 'odometry', 'watchdog', 'track_m', 'name', 'command',
               'wheel_velocities', 'wheel_joint_states', 'ground_truth', 'link_pose', 'commanded_twist',
-              'obstacle_ids', 'contacts_with_obstacles', 'within', 'cast_rays', 'clearance')
+              'contacts_with_obstacles', 'within', 'cast_rays', 'clearance')
 
     def __init__(self, sim, robot):
         self._sim = sim

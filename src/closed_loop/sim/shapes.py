@@ -3,9 +3,10 @@
 An obstacle is a vertical prism: a box (walls are boxes) or a cylinder. :data:`SHAPES` maps the
 obstacle's ``shape`` to a class that gives, for one obstacle at its time-0 position, the signed distance
 from a point to its footprint, its outline (for pictures), whether a robot's rectangle overlaps it, and its
-pybullet collision and visual shapes. World checks, the demo's clearance report and the simulator all go through this table, so
-a new shape is one class here. Each also casts planar rays at a group of its obstacles
-(``ray_distances``), for the LIDAR's planar ray caster (``closed_loop.sim.planar_rays``).
+pybullet collision and visual shapes (alone, or as one of a compound's). World checks, the demo's clearance report and the simulator all go through this table, so
+a new shape is one class here. Each also casts planar rays at its obstacles (``ray_prepare`` once per
+scan, then ``ray_pairs`` for ray-obstacle pairs), for the LIDAR's planar ray caster
+(``closed_loop.sim.planar_rays``).
 """
 import math
 
@@ -61,22 +62,25 @@ class Box:
 
     @staticmethod
     def ray_params(obstacles):
-        """What :meth:`ray_distances` needs of each box, (M, 5): cos and sin of its yaw, its half-sizes, and
-        the radius of the circle round its footprint."""
+        """What the planar caster needs of each box, (M, 5): cos and sin of its yaw, its half-sizes, and the
+        radius of the circle round its footprint."""
         return numpy.array([(math.cos(o.yaw), math.sin(o.yaw), 0.5 * o.size[0], 0.5 * o.size[1],
                              0.5 * math.hypot(o.size[0], o.size[1])) for o in obstacles]).reshape(-1, 5)
 
     @staticmethod
-    def ray_distances(params, centres, origin, dirs):
-        """Distance from ``origin`` (x, y) along ``dirs`` (unit, (..., 2)) to boxes (``params`` rows of
-        :meth:`ray_params`, (..., 5); centres ``centres``, (..., 2)), all three broadcast together (each ray
-        against each box: ``params[None]``, ``centres[None]``, ``dirs[:, None]``; ray-box pairs: as they come);
-        inf where the ray misses (or starts inside)."""
-        c, s, hx, hy = params[..., 0], params[..., 1], params[..., 2], params[..., 3]
-        rel = numpy.asarray(origin) - centres
-        ox, oy = c * rel[..., 0] + s * rel[..., 1], -s * rel[..., 0] + c * rel[..., 1]      # in each box
-        dx = dirs[..., 0] * c + dirs[..., 1] * s
-        dy = -dirs[..., 0] * s + dirs[..., 1] * c
+    def ray_prepare(params, centres, origin):
+        """What :meth:`ray_pairs` needs of each box (``params`` rows of :meth:`ray_params`, ``centres`` (M, 2))
+        seen from ``origin`` (x, y): its yaw's cosine and sine, its half sizes, and the origin in its frame."""
+        c, s, hx, hy = params[:, 0], params[:, 1], params[:, 2], params[:, 3]
+        rx, ry = origin[0] - centres[:, 0], origin[1] - centres[:, 1]
+        return c, s, hx, hy, c * rx + s * ry, -s * rx + c * ry
+
+    @staticmethod
+    def ray_pairs(prepared, obstacle, fx, fy):
+        """Distance along each ray (directions ``fx``, ``fy``, unit) to box ``obstacle`` (indices into
+        :meth:`ray_prepare`'s arrays, shaped as the rays), inf where the ray misses it (or starts inside)."""
+        c, s, hx, hy, ox, oy = (a[obstacle] for a in prepared)
+        dx, dy = fx * c + fy * s, -fx * s + fy * c
         with numpy.errstate(divide='ignore', invalid='ignore'):
             inv_x, inv_y = 1.0 / dx, 1.0 / dy
             ax, bx = (-hx - ox) * inv_x, (hx - ox) * inv_x
@@ -84,6 +88,11 @@ class Box:
             near = numpy.maximum(numpy.fmin(ax, bx), numpy.fmin(ay, by))
             far = numpy.minimum(numpy.fmax(ax, bx), numpy.fmax(ay, by))
         return numpy.where((near <= far) & (near >= 0.0), near, numpy.inf)
+
+    @staticmethod
+    def pybullet_kind(obstacle, pybullet):
+        """(geometry type, radius, half extents, length): the box as one shape of a pybullet shape array."""
+        return pybullet.GEOM_BOX, 0.0, [0.5 * s for s in obstacle.size], 0.0
 
     @staticmethod
     def pybullet_shapes(obstacle, call, pybullet):
@@ -122,14 +131,25 @@ class Cylinder:
         return numpy.array([(o.radius,) for o in obstacles]).reshape(-1, 1)
 
     @staticmethod
-    def ray_distances(params, centres, origin, dirs):
-        """As :meth:`Box.ray_distances`, for cylinders."""
-        radius = params[..., 0]
-        rx, ry = centres[..., 0] - origin[0], centres[..., 1] - origin[1]     # from the origin
-        b = dirs[..., 0] * rx + dirs[..., 1] * ry                   # along each ray to the closest point
-        disc = b * b - (rx * rx + ry * ry - radius * radius)
+    def ray_prepare(params, centres, origin):
+        """As :meth:`Box.ray_prepare`, for cylinders: the centre from the origin, and its squared distance less
+        the squared radius."""
+        rx, ry = centres[:, 0] - origin[0], centres[:, 1] - origin[1]
+        return rx, ry, rx * rx + ry * ry - params[:, 0] * params[:, 0]
+
+    @staticmethod
+    def ray_pairs(prepared, obstacle, fx, fy):
+        """As :meth:`Box.ray_pairs`, for cylinders."""
+        rx, ry, c = prepared
+        b = fx * rx[obstacle] + fy * ry[obstacle]          # along each ray to the closest point
+        disc = b * b - c[obstacle]
         t = b - numpy.sqrt(numpy.maximum(disc, 0.0))
         return numpy.where((disc >= 0.0) & (t >= 0.0), t, numpy.inf)
+
+    @staticmethod
+    def pybullet_kind(obstacle, pybullet):
+        """As :meth:`Box.pybullet_kind`, for a cylinder."""
+        return pybullet.GEOM_CYLINDER, obstacle.radius, [0.0, 0.0, 0.0], obstacle.size[2]
 
     @staticmethod
     def pybullet_shapes(obstacle, call, pybullet):

@@ -11,7 +11,7 @@ the ground truth frame; odometry starts at the robot's start pose.
 """
 from dataclasses import dataclass
 
-import numpy as np
+import numpy
 
 from closed_loop.sim.quiet import import_pybullet
 from closed_loop.sim import obstacles, shapes
@@ -28,6 +28,12 @@ GRAVITY_MPS2 = 9.81
 # of the cost.
 SOLVER_ITERATIONS = 20
 
+
+#: Shapes in one static compound body at most (pybullet keeps only the first 16 of a collision shape array).
+COMPOUND_MOST = 16
+#: Without rendering, each obstacle body looks like an invisible cube this size (m, half side): pybullet would
+#: otherwise build a look from its collision shapes (a cylinder's mesh: 0.2 ms each).
+SPECK_M = 1e-3
 
 #: pybullet DIRECT clients that closed Simulations left, emptied, for the next ones of this process.
 _IDLE_CLIENTS = []
@@ -95,11 +101,14 @@ class Simulation:
     ``settings`` also holds what is the world's: ``physics_rate_hz`` and ``gui``.
     """
 
-    def __init__(self, world, settings, urdf=None, robots=None):
-        """``urdf``: the robot description, as URDF text or a file path (default: urdf/closed_loop.urdf)."""
+    def __init__(self, world, settings, urdf=None, robots=None, render=True):
+        """``urdf``: the robot description, as URDF text or a file path (default: urdf/closed_loop.urdf);
+        ``render``: the obstacles get their visual shapes (a camera or pybullet's window will look at them;
+        without, each body gets a speck, as building the look of a shape costs more than the rest of it)."""
         self.world = world
         self.settings = settings
         self.dt_s = 1.0 / settings.physics_rate_hz
+        self._render = render or settings.gui
         self._client = _IDLE_CLIENTS.pop() if _IDLE_CLIENTS and not settings.gui else \
             pybullet.connect(pybullet.GUI if settings.gui else pybullet.DIRECT)
         self._gui = settings.gui
@@ -118,6 +127,9 @@ class Simulation:
             self.close()
             raise
         self._robot_ids = {robot.robot_id: robot.name for robot in self.robots}
+        for robot in self.robots:
+            self._bodies[robot.robot_id] = robot.name
+            self._body_of[robot.name] = robot.robot_id
 
     # -- construction -------------------------------------------------------------------------------
     def _call(self, fn, *args, **kwargs):
@@ -136,35 +148,69 @@ class Simulation:
                                    rgbaColor=list(self.world.ground_color))
         self.ground_id = self._call(p.createMultiBody, 0, ground_shape, ground_visual)
         self._call(p.changeDynamics, self.ground_id, -1, lateralFriction=1.0)
-        self._obstacle_ids = {}
-        self._movers = {}  # uid -> (obstacle, path corners, cycle length m)
-        uids = []
+        self._speck = None if self._render else self._call(p.createVisualShape, p.GEOM_BOX, halfExtents=[SPECK_M] * 3,
+                                                             rgbaColor=[0, 0, 0, 0])
+        #: body uid -> what it holds: a name (a moving obstacle, a robot) or the obstacles of a static group.
+        self._bodies = {}
+        self._body_of = {}               # obstacle or robot name -> its body's uid
+        self._movers = {}                # uid -> (obstacle, path corners, cycle length m)
+        owners = {}
+        for group in obstacles.static_groups(self.world.obstacles, COMPOUND_MOST):
+            uid = self._add_static_group(group)
+            self._bodies[uid] = tuple(group)
+            owners.update((o.name, uid) for o in group)
         for obstacle in self.world.obstacles:
-            uid = self._add_obstacle(obstacle)
-            self._obstacle_ids[uid] = obstacle.name
-            uids.append(uid)
             if obstacle.motion is not None:
+                uid = self._add_mover(obstacle)
+                self._bodies[uid] = obstacle.name
+                owners[obstacle.name] = uid
                 points, cycle_m = obstacles.motion_path(obstacle)
                 self._movers[uid] = (obstacle, points, cycle_m)
-        # Each obstacle's uid, centre at rest and the radius of a circle round its footprint, for
-        # obstacles_near; a mover's centre is read when asked.
-        self._extent_uids = np.array(uids, dtype=np.int64)
-        self._extent_centres = np.array([o.position[:2] for o in self.world.obstacles], float).reshape(-1, 2)
-        self._extent_radii = np.array([shapes.bounding_radius(o) for o in self.world.obstacles], float)
+        self._body_of.update(owners)
+        # Each obstacle's body, centre at rest and the radius of a circle round its footprint, for
+        # obstacles_near, in the world's order; a mover's centre is read when asked.
+        self._extent_uids = numpy.array([owners[o.name] for o in self.world.obstacles], dtype=numpy.int64)
+        self._extent_centres = numpy.array([o.position[:2] for o in self.world.obstacles], float).reshape(-1, 2)
+        self._extent_radii = numpy.array([shapes.bounding_radius(o) for o in self.world.obstacles], float)
 
-    def _add_obstacle(self, obstacle):
+    def _add_static_group(self, group):
+        """One static rigid body of the obstacles of ``group`` (at most COMPOUND_MOST), each a shape of its
+        compound at its own pose. The physics passes over a static body at every step almost for free, and a
+        few compounds for free again: among 315 posts a step costs 62 us as 20 compounds, 77 us as 315 bodies,
+        55 us with none; building them, 3 ms against 190."""
+        p = pybullet
+        if len(group) == 1:                 # alone: a body of its own shape, as a moving obstacle's
+            return self._add_mover(group[0])
+        kinds, frames = [shapes.SHAPES[o.shape].pybullet_kind(o, p) for o in group], \
+            dict(positions=[list(o.position) for o in group], orientations=[yaw_quaternion(o.yaw) for o in group])
+        args = dict(radii=[k[1] for k in kinds], halfExtents=[k[2] for k in kinds], lengths=[k[3] for k in kinds])
+        types = [k[0] for k in kinds]
+        collision = self._call(p.createCollisionShapeArray, types, collisionFramePositions=frames['positions'],
+                               collisionFrameOrientations=frames['orientations'], **args)
+        visual = self._speck if not self._render else self._call(
+            p.createVisualShapeArray, types, visualFramePositions=frames['positions'],
+            visualFrameOrientations=frames['orientations'], rgbaColors=[list(o.color) for o in group], **args)
+        return self._call(p.createMultiBody, 0, collision, visual, useMaximalCoordinates=True)
+
+    def _add_mover(self, obstacle):
+        """A body of its own for one obstacle (a moving one is moved to where its path has taken it before each
+        step)."""
         shape, visual = shapes.SHAPES[obstacle.shape].pybullet_shapes(obstacle, self._call, pybullet)
-        # A plain rigid body (maximal coordinates), not a one-link multibody: the physics passes over a
-        # static rigid body at every step almost for free, where each multibody costs time (posts, 208
-        # obstacles: 98 us a step as multibodies, 49 us as rigid bodies; the same trajectory).
-        return self._call(pybullet.createMultiBody, 0, shape, visual, basePosition=list(obstacle.position),
-                          baseOrientation=yaw_quaternion(obstacle.yaw), useMaximalCoordinates=True)
+        return self._call(pybullet.createMultiBody, 0, shape, visual if self._render else self._speck,
+                          basePosition=list(obstacle.position), baseOrientation=yaw_quaternion(obstacle.yaw),
+                          useMaximalCoordinates=True)
 
-    def solid_ids(self, robot):
-        """{body uid: name} of what ``robot`` can touch or see: every obstacle and every other robot."""
-        solids = dict(self._obstacle_ids)
-        solids.update((uid, name) for uid, name in self._robot_ids.items() if uid != robot.robot_id)
-        return solids
+    def name_at(self, uid, point):
+        """The name of what body ``uid`` holds at ``point`` (x, y, ... on its surface, m): its obstacle or robot,
+        or of a static group the obstacle whose footprint is nearest the point; None for the ground or another body."""
+        held = self._bodies.get(uid)
+        if held is None or isinstance(held, str):
+            return held
+        return min(held, key=lambda o: shapes.distance(o, point[0], point[1])).name
+
+    def body_of(self, name):
+        """The uid of the body holding the obstacle or robot ``name``."""
+        return self._body_of[name]
 
     def other_robot_ids(self, robot):
         """The body uids of the robots other than ``robot``."""
@@ -180,7 +226,6 @@ class Simulation:
     odometry = _first_robot('odometry')
     watchdog = _first_robot('watchdog')
     track_m = _first_robot('track_m')
-    obstacle_ids = _first_robot('obstacle_ids')
     command = _first_robot('command')
     wheel_velocities = _first_robot('wheel_velocities')
     wheel_joint_states = _first_robot('wheel_joint_states')
@@ -233,23 +278,25 @@ class Simulation:
 
     @property
     def obstacle_uids(self):
-        """The body uids of the world's obstacles."""
-        return self._obstacle_ids.keys()
+        """The body uids holding the world's obstacles (a static group's compound, each moving obstacle's own)."""
+        return [uid for uid, held in self._bodies.items() if uid not in self._robot_ids]
 
     def obstacles_near(self, x, y, reach_m):
-        """[(lower bound m, uid)] of the obstacles whose footprint comes within ``reach_m`` of the point
-        (x, y), or may, nearest bound first: the bound is the distance from the point to a circle round
-        each footprint, never more than the distance to the footprint itself."""
+        """[(lower bound m, uid)] of the bodies holding an obstacle whose footprint comes within ``reach_m`` of
+        the point (x, y), or may, nearest bound first: the bound is the distance from the point to a circle
+        round the nearest such footprint, never more than the distance to the footprint itself."""
         centres = self._extent_centres
         if self._movers:
             centres = centres.copy()
             for index, uid in enumerate(self._extent_uids):
                 if int(uid) in self._movers:
                     centres[index] = self._call(pybullet.getBasePositionAndOrientation, int(uid))[0][:2]
-        bounds = np.hypot(centres[:, 0] - x, centres[:, 1] - y) - self._extent_radii
-        near = np.flatnonzero(bounds <= reach_m)
-        near = near[np.argsort(bounds[near], kind='stable')]
-        return [(float(bounds[i]), int(self._extent_uids[i])) for i in near]
+        bounds = numpy.hypot(centres[:, 0] - x, centres[:, 1] - y) - self._extent_radii
+        near = numpy.flatnonzero(bounds <= reach_m)
+        least = {}
+        for i in near[numpy.argsort(bounds[near], kind='stable')]:
+            least.setdefault(int(self._extent_uids[i]), float(bounds[i]))
+        return [(bound, uid) for uid, bound in least.items()]
 
     @property
     def has_moving_obstacles(self):
@@ -257,7 +304,7 @@ class Simulation:
 
     def rotation_matrix(self, quaternion):
         """The 3x3 rotation matrix of a quaternion (x, y, z, w)."""
-        return np.array(self._call(pybullet.getMatrixFromQuaternion, quaternion)).reshape(3, 3)
+        return numpy.array(self._call(pybullet.getMatrixFromQuaternion, quaternion)).reshape(3, 3)
 
     def cast_rays_masked(self, ray_from, ray_to, collision_filter_mask=ALL_GROUPS):
         """Cast rays (two (N, 3) arrays, m); (body uid of the first hit or -1, hit fraction) per ray. Only
@@ -265,8 +312,8 @@ class Simulation:
         hits = self._call(pybullet.rayTestBatch, ray_from.tolist(), ray_to.tolist(),
                           collisionFilterMask=collision_filter_mask)
         n = len(hits)
-        return (np.fromiter((h[0] for h in hits), dtype=np.int64, count=n),
-                np.fromiter((h[2] for h in hits), dtype=np.float64, count=n))
+        return (numpy.fromiter((h[0] for h in hits), dtype=numpy.int64, count=n),
+                numpy.fromiter((h[2] for h in hits), dtype=numpy.float64, count=n))
 
     def render(self, width, height, eye, target, up, vertical_fov_deg, near_m, far_m):
         """An RGBA image (height, width, 4) uint8 seen from ``eye`` toward ``target`` with ``up`` up."""
@@ -274,7 +321,7 @@ class Simulation:
         projection = self._call(pybullet.computeProjectionMatrixFOV, vertical_fov_deg, width / height, near_m, far_m)
         _, _, rgba, _, _ = self._call(pybullet.getCameraImage, width, height, view, projection,
                                       renderer=pybullet.ER_TINY_RENDERER, flags=pybullet.ER_NO_SEGMENTATION_MASK)
-        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)
+        return numpy.asarray(rgba, dtype=numpy.uint8).reshape(height, width, 4)
 
     def close(self):
         if self._client is not None and self._client >= 0:

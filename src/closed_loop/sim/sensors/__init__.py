@@ -10,7 +10,9 @@ The contract of a sensor class:
 - ``settings_class``: a settings dataclass (its fields are the node's ``~parameters``), or None;
 - ``__init__(settings, sim)``; ``available`` False when the robot lacks it (no camera link);
 - ``period_s`` (None: every physics step) and ``offset_s`` (when in the period it samples);
-- ``sample(sim)``: one reading; ``reset()``: forget state when the world is reset.
+- ``sample(sim)``: one reading; ``reset()``: forget state when the world is reset;
+- ``renders(settings)``: True when, with these settings, it looks at the world's visual shapes (a camera):
+  without any such sensor the simulation builds none.
 
 Adding a sensor: a file here with such a class, a conversion to its message in
 ``closed_loop.nodes.sim_node``, and one line in that node's ``SENSORS`` table (docs/development.md, "Adding a sensor").
@@ -46,6 +48,11 @@ class Sensor:
     @property
     def available(self):
         return True
+
+    @staticmethod
+    def renders(settings):
+        """True if a sensor of these settings renders the world (the obstacles then need their looks)."""
+        return False
 
     @property
     def period_s(self):

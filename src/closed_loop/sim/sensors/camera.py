@@ -58,6 +58,10 @@ class Camera(Sensor):
     def available(self):
         return self._available
 
+    @staticmethod
+    def renders(settings):
+        return bool(settings.camera)
+
     @property
     def period_s(self):
         return 1.0 / self.settings.camera_rate_hz

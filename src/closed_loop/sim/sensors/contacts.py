@@ -19,14 +19,14 @@ class Contacts(Sensor):
         self.count = 0
 
     def sample(self, sim):
-        touching = {uid for uid in sim.contacts_with_obstacles()}
-        for uid in self._touching:
-            if sim.within(uid, CONTACT_RELEASE_M):
-                touching.add(uid)
+        touching = set(sim.contacts_with_obstacles())
+        for name in self._touching:
+            if sim.within(name, CONTACT_RELEASE_M):
+                touching.add(name)
         began = touching - self._touching
         self._touching = touching
         self.count += len(began)
-        return sorted(sim.obstacle_ids[uid] for uid in began)
+        return sorted(began)
 
     def touching(self, sim):
-        return sorted(sim.obstacle_ids[uid] for uid in self._touching)
+        return sorted(self._touching)

@@ -83,8 +83,6 @@ class Lidar(Sensor):
                 raise SettingsError("~ray_caster: 'planar' does not see other robots, and this world has %d: "
                                     "expected 'pybullet'" % len(sim.robots))
             self._planar = PlanarRays(sim.world.obstacles)
-            self._centres = None if sim.has_moving_obstacles else \
-                np.array([o.position for o in sim.world.obstacles], float).reshape(-1, 3)
             self._own_body = None        # the rays the robot's own body stops (in its frame), found once
 
     @property
@@ -107,9 +105,10 @@ class Lidar(Sensor):
             uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * s.range_max)
             self._own_body = uids == sim.robot_id
         if self._planar is not None and max(abs(rotation[2, 0]), abs(rotation[2, 1])) <= PLANAR_TILT_LIMIT:
-            centres = self._centres if self._centres is not None else \
-                [position for _, position in sim.obstacle_positions()]
-            ranges = self._planar.cast(centres, origin, dirs, s.range_max)
+            centres = None if not sim.has_moving_obstacles else [position for _, position in sim.obstacle_positions()]
+            fan = (math.atan2(dirs[0, 1], dirs[0, 0]), self.layout.angle_increment) \
+                if self.layout.angle_increment > 0 else None
+            ranges = self._planar.cast(centres, origin, dirs, s.range_max, fan=fan)
             ranges[self._own_body] = np.inf
             ranges[ranges < s.range_min] = -np.inf
         else:
