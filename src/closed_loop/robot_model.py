@@ -4,6 +4,7 @@ The URDF (on ``robot_description``) is the single source of the robot's geometry
 separation, the footprint rectangle, where the LIDAR and camera sit. A robot profile names which of its
 frames and joints play which part (:class:`RobotNames`); nothing here restates a dimension.
 """
+import functools
 import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
@@ -83,11 +84,17 @@ def load_robot_model(urdf, names=RobotNames(), source=None):
 
     Wheel radius from the wheel links' collision cylinders (all equal); wheel separation from the joint
     origins (the mean y of the left wheels minus that of the right ones). Frames named in ``names`` must
-    exist (the camera's only if ``names.camera_frame`` is not empty).
+    exist (the camera's only if ``names.camera_frame`` is not empty). The same text and names give the same
+    (frozen) model, read once per process.
     """
     if not urdf.lstrip().startswith('<'):
         source = source or urdf
         urdf = read_urdf(urdf)
+    return _robot_model(urdf, names, source)
+
+
+@functools.lru_cache(maxsize=16)
+def _robot_model(urdf, names, source):
     source = source or 'robot_description'
     root, poses = link_transforms(urdf, names.base_frame, source)
     joints = {j.get('name'): j for j in root.findall('joint')}

@@ -103,3 +103,13 @@ def test_a_reused_pybullet_client_gives_the_result_of_a_fresh_one(monkeypatch):
     fresh = run_episode(NOISY)
     assert not simulation._IDLE_CLIENTS
     assert results_equal(first, reused) and results_equal(fresh, reused)
+
+
+@pytest.mark.parametrize('world, controller', [('posts', 'stop_on_obstacle'), ('obstacle_course', 'avoid_obstacles')])
+def test_the_least_clearance_is_the_same_whether_or_not_the_track_is_kept(world, controller):
+    """Without a track, the loop looks only for a clearance below the least so far: the least is unchanged."""
+    kept = run_episode(EpisodeSpec(world=world, controller=controller, time_limit_s=15.0, keep_trajectory=True))
+    lean = run_episode(EpisodeSpec(world=world, controller=controller, time_limit_s=15.0))
+    assert kept.min_clearance_m == lean.min_clearance_m < 1.0
+    assert kept.final_pose == lean.final_pose and kept.simulated_s == lean.simulated_s > kept.time_s - 1e-9
+    assert min(row[8] for row in kept.trajectory) == kept.min_clearance_m

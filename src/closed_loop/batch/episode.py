@@ -97,6 +97,9 @@ class EpisodeResult(Verdict):
     the trajectory, a row per judged instant (t, x, y, yaw, speed, command v, command w, mode, clearance:
     ``closed_loop.batch.judge.TRACK_FIELDS``), and the contacts, a row each (t, x, y, yaw, [obstacles])."""
     wall_s: float = 0.0
+    #: How long it ran in simulated time (s): its time limit, or when the judge ended it (at rest a while after
+    #: ``time_s``, or at a contact); 0 for a graph episode, whose simulator runs apart.
+    simulated_s: float = 0.0
     decision_ms: list = dataclasses.field(default_factory=list)
     #: Other costs the controller measured, {name: [ms, ...]} (the fusion controller's ``fusion_ms``).
     timings: dict = dataclasses.field(default_factory=dict)

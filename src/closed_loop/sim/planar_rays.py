@@ -139,14 +139,17 @@ def _fan_pairs(fan, count, near, rel_x, rel_y, distance, radius, stray=0.0):
     it, the part on the other side too. The pairs come in the order of ``near``."""
     first, increment = fan
     centre = numpy.mod(numpy.arctan2(rel_y, rel_x) - first, TWO_PI)       # from the first ray, [0, 2 pi)
-    half = _half_widths(distance, radius, stray)
-    centre = numpy.concatenate((centre - TWO_PI, centre, centre + TWO_PI))
-    half = numpy.concatenate((half, half, half))
-    start = numpy.clip(numpy.ceil((centre - half) / increment), 0, count).astype(numpy.intp)
-    end = numpy.clip(numpy.floor((centre + half) / increment) + 1, 0, count).astype(numpy.intp)
-    n = len(near)
-    take = numpy.arange(3 * n).reshape(3, n).T.ravel()                  # each obstacle's three windows together
-    return _expand(start[take], end[take], numpy.repeat(near, 3))
+    half = numpy.repeat(_half_widths(distance, radius, stray), 3)
+    centre = (centre[:, None] + _TURNS).ravel()                           # each window, a turn before and after
+    # Ray indices: from ceil((centre - half) / increment), to floor((centre + half) / increment) inclusive.
+    bounds = numpy.floor(numpy.stack((half - centre, centre + half)) / increment)
+    # -start within [-count, 0], end - 1 within [-1, count - 1]
+    numpy.clip(bounds, ((-count,), (-1,)), ((0,), (count - 1,)), out=bounds)
+    edges = bounds.astype(numpy.intp)
+    return _expand(-edges[0], edges[1] + 1, numpy.repeat(near, 3))
+
+
+_TURNS = numpy.array([-TWO_PI, 0.0, TWO_PI])
 
 
 def _sorted_pairs(windows, near, rel_x, rel_y, distance, radius):

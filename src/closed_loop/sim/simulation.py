@@ -35,7 +35,7 @@ COMPOUND_MOST = 16
 #: otherwise build a look from its collision shapes (a cylinder's mesh: 0.2 ms each).
 SPECK_M = 1e-3
 
-#: pybullet DIRECT clients that closed Simulations left, emptied, for the next ones of this process.
+#: pybullet DIRECT clients that closed Simulations left for the next ones of this process.
 _IDLE_CLIENTS = []
 MAX_IDLE_CLIENTS = 1
 
@@ -328,8 +328,8 @@ class Simulation:
             if self._gui or len(_IDLE_CLIENTS) >= MAX_IDLE_CLIENTS:
                 pybullet.disconnect(physicsClientId=self._client)
             else:
-                # Kept, emptied, for the next Simulation of this process: a batch of short episodes saves
-                # pybullet's connection, about 20 ms each. _build sets everything again after resetSimulation.
-                pybullet.resetSimulation(physicsClientId=self._client)
+                # Kept for the next Simulation of this process, which empties it first (_build: resetSimulation,
+                # then everything set again): a batch of short episodes saves pybullet's connection, about 20 ms
+                # each.
                 _IDLE_CLIENTS.append(self._client)
             self._client = None

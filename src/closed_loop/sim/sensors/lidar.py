@@ -61,6 +61,8 @@ def scan_layout(angle_min, angle_max, samples):
     return ScanLayout(angle_min, angle_min + increment * (samples - 1), increment, samples)
 
 
+#: How much farther than the footprint's diagonal (m) the rays that look for the robot's own body reach.
+OWN_BODY_SLACK_M = 0.1
 #: The planar caster is used while the scan plane is this level (the sine of its tilt; the package's robot
 #: rests pitched by 0.009); beyond, pybullet's caster (a robot tipping over a bump).
 PLANAR_TILT_LIMIT = 0.05
@@ -102,7 +104,10 @@ class Lidar(Sensor):
         dirs = self._ray_dirs @ rotation.T
         origin = np.asarray(pose.position)
         if self._planar is not None and self._own_body is None:
-            uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * s.range_max)
+            # The robot's own body is within its footprint's diagonal of the LIDAR: no need to cast farther.
+            fp = sim.model.footprint
+            reach = min(s.range_max, math.hypot(fp.length_m, fp.width_m) + OWN_BODY_SLACK_M)
+            uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * reach)
             self._own_body = uids == sim.robot_id
         if self._planar is not None and max(abs(rotation[2, 0]), abs(rotation[2, 1])) <= PLANAR_TILT_LIMIT:
             centres = None if not sim.has_moving_obstacles else [position for _, position in sim.obstacle_positions()]
