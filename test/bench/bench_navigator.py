@@ -1,8 +1,11 @@
 #!/usr/bin/env python3
-"""The navigator in generated clutter: 50 worlds with the Jackal, goal 10 m ahead, 80 s of simulated time.
+"""The navigator in generated clutter: 50 worlds with the Jackal, goal 10 m ahead, 80 s of simulated time; and
+in worlds made by the BARN benchmark's method.
 
 Run: ``python3 test/bench/bench_navigator.py`` inside ``source env.sh`` (``make bench`` does that).
-Options: ``--seeds N`` per fill ratio (default 10), ``--robot NAME`` (default jackal), ``-v`` a line per world.
+Options: ``--seeds N`` per fill ratio (default 10), ``--robot NAME`` (default jackal), ``-v`` a line per world,
+``--method corridor|barn`` one set only (default: both; ``--seeds`` per fill, default 10 for the generated set
+and 50 for the BARN-method set: 300 worlds).
 
 Worlds: ``closed_loop.sim.clutter`` with fill ratios 0.2, 0.4, 0.6, 0.8 and 1.0 and seeds 0 .. N-1 (its default
 geometry: sites 1.1 m apart, narrowest gaps 1.3 robot widths, a corridor the robot fits at any heading).
@@ -13,7 +16,13 @@ navigator's defaults otherwise. Success: the navigator said REACHED and ground t
 the goal, with no contact. Decision cost: the wall time of each planning decision (``Navigator.update`` when
 it plans), on this process's one core, twice: in the episode loop, between pybullet's physics steps,
 and replayed afterwards, every run's recorded inputs in order through a fresh Navigator with nothing
-else in the loop, as the node runs in its own process; the replay makes the same decisions.
+else in the loop, as the node runs in its own process (every run of the generated set, REPLAY_RUNS spread over
+the BARN-method set); the replay makes the same decisions.
+
+The BARN-method set (``closed_loop.sim.barn``, smoothing 2): fills BARN_FILLS (few scattered posts to walls and
+pockets), seeds from 0 (a seed whose field leaves no way for the robot is passed over for the next). Scored as
+the benchmark scores a run: success x optimal time / its time clipped between 2 and 8 optimal times, the
+optimal time being the world's shortest footprint-feasible way (``barn.way_length``) at the robot's top speed.
 
 Targets: success at least 90 %, zero contacts in every run, decision p99 under 5 ms. Figures, not pass/fail:
 the exit status is non-zero only when an episode could not run.
@@ -29,33 +38,44 @@ import numpy
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
+from closed_loop.sim import barn, generators  # noqa: E402
 from closed_loop.sim.clutter import ClutterSettings, generate, narrowest_gap, robot_extent  # noqa: E402
 from closed_loop.control import navigator as navigator_module  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 
 FILL_RATIOS = (0.2, 0.4, 0.6, 0.8, 1.0)
+BARN_FILLS = (0.20, 0.30, 0.35, 0.40, 0.425, 0.45)
+#: A BARN-method seed is tried up to this many later seeds on when its field leaves no way.
+BARN_SEED_TRIES = 50
 TIME_LIMIT_S = 80.0
 TARGET_SUCCESS = 0.90
 TARGET_DECISION_P99_MS = 5.0
+#: The decisions of about this many runs, spread over the set, are kept to be replayed (a run's scans are about
+#: 2 MB).
+REPLAY_RUNS = 60
 
 
 class Recorder:
     """Keeps every Navigator's settings, start and goal and the inputs of its updates, to replay them."""
 
-    def __init__(self):
+    def __init__(self, every=1):
         self.runs = []
+        self.started = 0
         self._init = navigator_module.Navigator.__init__
         self._update = navigator_module.Navigator.update
         recorder = self
 
         def init(nav, settings, start_pose, goal_xy=None, on_transition=None):
             recorder._init(nav, settings, start_pose, goal_xy, on_transition)
-            nav._bench_inputs = []
-            recorder.runs.append((settings, start_pose, goal_xy, nav._bench_inputs))
+            nav._bench_inputs = [] if recorder.started % every == 0 else None
+            recorder.started += 1
+            if nav._bench_inputs is not None:
+                recorder.runs.append((settings, start_pose, goal_xy, nav._bench_inputs))
 
         def update(nav, *args):
-            nav._bench_inputs.append(args)
+            if nav._bench_inputs is not None:
+                nav._bench_inputs.append(args)
             return recorder._update(nav, *args)
         navigator_module.Navigator.__init__ = init
         navigator_module.Navigator.update = update
@@ -76,44 +96,97 @@ class Recorder:
         return times
 
 
+def barn_worlds(seeds, profile):
+    """[(the world's generator values, its optimal way m)], ``seeds`` per fill of BARN_FILLS."""
+    worlds = []
+    for fill in BARN_FILLS:
+        seed = 0
+        for _ in range(seeds):
+            for seed in range(seed, seed + BARN_SEED_TRIES):
+                values = {'method': 'barn', 'seed': seed, 'fill': fill, 'smoothing': 2}
+                settings = generators.settings_from(values, profile.name)
+                try:
+                    world = generators.generate(settings, profile)
+                except generators.GeneratorError:
+                    continue
+                worlds.append((values, barn.way_length(settings, barn.field_of_world(settings, world), profile)[0]))
+                break
+            seed += 1
+    return worlds
+
+
+def score(result, optimal_s):
+    """The BARN benchmark's score of a run: success x optimal time / its time clipped to 2 to 8 optimal times."""
+    return (result.outcome == 'reached') * optimal_s / min(max(result.time_s, 2 * optimal_s), 8 * optimal_s)
+
+
+def clutter_worlds(seeds, profile):
+    """[(the world's generator values, the goal)], ``seeds`` per fill ratio of FILL_RATIOS."""
+    return [({'seed': seed, 'fill_ratio': fill}, (ClutterSettings().length, 0.0))
+            for fill in FILL_RATIOS for seed in range(seeds)]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--seeds', type=int, default=10)
+    parser.add_argument('--seeds', type=int, default=None)
     parser.add_argument('--robot', default='jackal')
+    parser.add_argument('--method', choices=('corridor', 'barn'), default=None)
     parser.add_argument('-v', '--verbose', action='store_true')
     args = parser.parse_args()
+    for method in [args.method] if args.method else ['corridor', 'barn']:
+        run_set(method, args)
+    return 0
+
+
+def run_set(method, args):
+    """Run and print one set of worlds (``method``: corridor, the generated set, or barn)."""
     profile = load_profile(args.robot)
     width, _ = robot_extent(profile)
+    top_speed = profile.node_params('avoid_obstacles').get('max_speed', navigator_module.NavigatorSettings().max_speed)
+    barn_set = method == 'barn'
+    seeds = args.seeds or (50 if barn_set else 10)
+    worlds = barn_worlds(seeds, profile) if barn_set else clutter_worlds(seeds, profile)
     rows = collections.defaultdict(list)
     decisions = []
-    recorder = Recorder()
+    recorder = Recorder(max(1, len(worlds) // REPLAY_RUNS))
     started = time.monotonic()
-    for fill in FILL_RATIOS:
-        for seed in range(args.seeds):
-            settings = ClutterSettings(seed=seed, fill_ratio=fill, profile=profile.name)
-            raw = generate(settings, profile)
-            result = run_episode(EpisodeSpec(world={'generator': {'seed': seed, 'fill_ratio': fill}},
-                                             robot=profile.name, controller='avoid_obstacles',
-                                             goal=(settings.length, 0.0), time_limit_s=TIME_LIMIT_S))
-            decisions.extend(result.decision_ms)
-            obstacles = len(raw['obstacles']) - 2
-            rows[fill].append((result, obstacles, narrowest_gap(raw)))
-            if args.verbose:
-                print('  %-28s %-9s %-12s %5.1f s  contacts %d  clearance %.3f m  goal error %.2f m  path %.1f m'
-                      % (raw['name'], result.outcome, result.mode, result.time_s, result.contacts,
-                         result.min_clearance_m, result.goal_error_m, result.path_m), flush=True)
-    print('%s, %d worlds, goal %.0f m ahead, %.0f s limit (%.0f s wall)'
-          % (profile.name, sum(len(r) for r in rows.values()), ClutterSettings().length, TIME_LIMIT_S,
+    for values, extra in worlds:
+        if barn_set:
+            raw = generators.generate(generators.settings_from(values, profile.name), profile)
+            goal, group, optimal_s = None, values['fill'], extra / top_speed
+        else:
+            raw = generate(ClutterSettings(profile=profile.name, **values), profile)
+            goal, group, optimal_s = extra, values['fill_ratio'], None
+        result = run_episode(EpisodeSpec(world={'generator': values}, robot=profile.name,
+                                         controller='avoid_obstacles', goal=goal, time_limit_s=TIME_LIMIT_S))
+        decisions.extend(result.decision_ms)
+        walls = sum(1 for o in raw['obstacles'] if o['type'] == 'wall')
+        rows[group].append((result, len(raw['obstacles']) - walls,
+                            optimal_s if barn_set else narrowest_gap(raw)))
+        if args.verbose:
+            print('  %-28s %-9s %-12s %5.1f s  contacts %d  clearance %.3f m  goal error %.2f m  path %.1f m'
+                  % (raw['name'], result.outcome, result.mode, result.time_s, result.contacts,
+                     result.min_clearance_m, result.goal_error_m, result.path_m), flush=True)
+    print('%s, %d %s worlds, %.0f s limit (%.0f s wall)'
+          % (profile.name, len(worlds), 'BARN-method' if barn_set else 'generated', TIME_LIMIT_S,
              time.monotonic() - started))
-    print('%-6s %-10s %-12s %-9s %-9s %-13s %-14s %s' % ('fill', 'obstacles', 'narrowest', 'success', 'contacts',
-                                                        'time to goal', 'min clearance', 'other outcomes'))
+    print('%-6s %-10s %-12s %-9s %-9s %-13s %-14s %s' % ('fill', 'obstacles', 'score' if barn_set else 'narrowest',
+                                                        'success', 'contacts', 'time to goal', 'min clearance',
+                                                        'other outcomes'))
     total = successes = contacts = 0
-    for fill, results in rows.items():
+    scores = []
+    for group, results in rows.items():
         reached = [r for r, _, _ in results if r.outcome == 'reached']
         others = collections.Counter(r.outcome for r, _, _ in results if r.outcome != 'reached')
-        gap = min(g for _, _, g in results)
-        print('%-6.1f %-10s %-12s %-9s %-9d %-13s %-14s %s' % (
-            fill, '%.0f' % numpy.mean([n for _, n, _ in results]), '%.2f m %.2fw' % (gap, gap / width),
+        if barn_set:
+            group_scores = [score(r, optimal_s) for r, _, optimal_s in results]
+            scores.extend(group_scores)
+            third = '%.3f' % numpy.mean(group_scores)
+        else:
+            gap = min(g for _, _, g in results)
+            third = '%.2f m %.2fw' % (gap, gap / width)
+        print('%-6.2f %-10s %-12s %-9s %-9d %-13s %-14s %s' % (
+            group, '%.0f' % numpy.mean([n for _, n, _ in results]), third,
             '%d/%d' % (len(reached), len(results)), sum(r.contacts for r, _, _ in results),
             '%.1f s' % numpy.mean([r.time_s for r in reached]) if reached else '-',
             '%.3f m' % min(r.min_clearance_m for r, _, _ in results),
@@ -124,12 +197,13 @@ def main():
     p50, p99 = numpy.percentile(decisions, [50, 99])
     alone = recorder.replay()
     a50, a99 = numpy.percentile(alone, [50, 99])
-    print('success %.0f%% (%d/%d; target at least %.0f%%), contacts %d (target 0)'
-          % (100.0 * successes / total, successes, total, 100 * TARGET_SUCCESS, contacts))
+    print('success %.0f%% (%d/%d; target at least %.0f%%), contacts %d (target 0)%s'
+          % (100.0 * successes / total, successes, total, 100 * TARGET_SUCCESS, contacts,
+             ', score %.3f (the benchmark\'s; optimal times at %.1f m/s)' % (numpy.mean(scores), top_speed)
+             if barn_set else ''))
     print('decision cost over %d decisions (target p99 under %.0f ms): p50 %.2f ms, p99 %.2f ms replayed alone '
           '(as the node, in its own process); p50 %.2f ms, p99 %.2f ms in the episode loop, between physics steps'
           % (len(alone), TARGET_DECISION_P99_MS, a50, a99, p50, p99))
-    return 0
 
 
 if __name__ == '__main__':
