@@ -11,6 +11,7 @@ import yaml
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, load_episode_world
 from closed_loop.lattice import FootprintLattice
 from closed_loop.sim import barn, barn_metrics, generators
+from closed_loop.sim.planar_rays import PlanarRays
 from closed_loop.sim.profiles import load_profile
 from closed_loop.sim.world import load_world
 
@@ -95,6 +96,20 @@ def test_a_barn_world_is_the_same_for_the_same_seed_and_has_its_way():
     load_world_ok = load_episode_world({'generator': {'method': 'barn', 'seed': 3, 'fill': 0.45, 'smoothing': 3}},
                                        JACKAL)
     assert len(load_world_ok.obstacles) == len(world['obstacles']) and load_world_ok.goal == (10.0, 0.0)
+
+
+def test_walls_close_the_way_round_so_the_field_cannot_be_gone_round():
+    # The way out of the start's and the goal's box is only through the field: every ray from the start and from
+    # the goal meets a wall or a post within the box (as the LIDAR's planar caster sees them).
+    world = load_episode_world({'generator': {'method': 'barn', 'seed': 3, 'fill': 0.2, 'smoothing': 2}}, JACKAL)
+    walls = [o for o in world.obstacles if o.shape == 'box']
+    assert len(walls) == 4
+    caster = PlanarRays(world.obstacles)
+    angles = numpy.linspace(-math.pi, math.pi, 720, endpoint=False)
+    dirs = numpy.column_stack((numpy.cos(angles), numpy.sin(angles), numpy.zeros(720)))
+    for x, y in ((0.0, 0.0), (10.0, 0.0)):
+        ranges = caster.cast(None, (x, y, 0.3), dirs, 30.0)
+        assert numpy.isfinite(ranges).all() and ranges.max() < math.hypot(12.5, 5.0), (x, y, ranges.max())
 
 
 def test_the_field_drawn_again_when_it_leaves_no_way():

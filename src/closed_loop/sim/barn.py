@@ -10,7 +10,8 @@ The rule (:func:`generate`), all drawn from one ``numpy`` generator seeded with 
 2. ``smoothing`` rounds of the automaton: a cell is filled next round when at least ``BIRTH`` of its 8
    neighbours are, and stays filled when at least ``SURVIVAL`` are (cells beyond the field's sides count as
    filled, beyond its ends as empty). Few rounds leave scattered posts; more grow them into walls and pockets.
-3. Two side walls along the whole way (the field cannot be gone round), the goal ``goal_distance`` ahead.
+3. Four walls round the whole way, a metre behind the start to a metre past the goal (the field cannot be gone
+   round), the goal ``goal_distance`` ahead.
 4. The guarantee: the robot's footprint rectangle, grown by ``margin``, must get from the start to the goal
    on the footprint lattice (``closed_loop.lattice``: 8 headings, moving along its heading, turning in place
    only where the turn's sweep is free). A field that fails it is drawn again (the next attempt), up to
@@ -172,10 +173,12 @@ def world_from_field(settings, field, attempt=0):
         obstacles.append({'name': 'post_%d_%d' % (r, c), 'type': 'cylinder',
                           'position': [round(float(x), 4), round(float(y), 4)], 'radius': round(0.5 * s.cell_m, 4),
                           'height': POST_HEIGHT_M, 'color': 'grey'})
-    x0, x1 = -1.0, s.goal_distance + 1.0
-    for side, name in ((1, 'wall_left'), (-1, 'wall_right')):
-        y = side * (layout.half_width + 0.5 * WALL_THICKNESS_M)
-        obstacles.append({'name': name, 'type': 'wall', 'start': [x0, y], 'end': [x1, y],
+    # Four walls round the whole way (a metre behind the start to a metre past the goal): nothing to go round.
+    x0, x1 = -1.0 - 0.5 * WALL_THICKNESS_M, s.goal_distance + 1.0 + 0.5 * WALL_THICKNESS_M
+    y1 = layout.half_width + 0.5 * WALL_THICKNESS_M
+    for name, start, end in (('wall_left', [x0, y1], [x1, y1]), ('wall_right', [x0, -y1], [x1, -y1]),
+                             ('wall_back', [x0, -y1], [x0, y1]), ('wall_front', [x1, -y1], [x1, y1])):
+        obstacles.append({'name': name, 'type': 'wall', 'start': start, 'end': end,
                           'thickness': WALL_THICKNESS_M, 'height': POST_HEIGHT_M, 'color': 'white'})
     return {
         'name': 'barn_%s_f%03d_m%d_s%d' % (s.profile, int(round(s.fill * 100)), s.smoothing, s.seed),
