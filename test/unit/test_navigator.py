@@ -145,7 +145,7 @@ def test_a_decision_at_720_rays_in_clutter_is_cheap():
 
 # --- the states, on injected time ----------------------------------------------------------------------------
 
-from closed_loop.control.navigator import Navigator, NavState  # noqa: E402
+from closed_loop.control.navigator import CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
 
 
 def test_reaching_the_goal_gives_zero_for_good():
@@ -204,6 +204,26 @@ def test_no_progress_recovers_then_fails():
     assert backing and all(st.linear_x < 0 for st in backing)      # the rear is clear here
     assert names[-1] is NavState.FAILED and (states[-1].linear_x, states[-1].angular_z) == (0.0, 0.0)
     assert transitions[-1][0] is NavState.FAILED and transitions[-1][1] == pytest.approx(10.0, abs=0.11)
+
+
+def test_where_it_was_stuck_is_closed_to_the_way_for_a_while():
+    # Between two walls 1.6 m apart the way runs straight ahead; a robot that makes no progress there (held
+    # in place) closes the place just ahead, and the way then leads round it, until the closure lapses.
+    scan = scan_of(segments=[((-1.0, 0.8), (6.0, 0.8)), ((-1.0, -0.8), (6.0, -0.8))])
+    half_width = FOOTPRINT.y_max + NavigatorSettings().safety_margin
+    before = wavefront.aim(scan_points(scan, LASER), (6.0, 0.0), half_width, 1.0)
+    nav = Navigator(NavigatorSettings(stuck_timeout=2.0), (0.0, 0.0, 0.0), goal_xy=(6.0, 0.0))
+    for i in range(25):
+        nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, scan, LASER, FOOTPRINT)
+    assert nav.state is NavState.RECOVERING
+    closed = nav._closed_points(2.5, (0.0, 0.0, 0.0))
+    assert numpy.hypot(*(closed.mean(axis=0) - (CLOSED_AHEAD_M, 0.0))) < 1e-9
+    after = wavefront.aim(numpy.concatenate((scan_points(scan, LASER), closed)), (6.0, 0.0), half_width, 1.0)
+    assert abs(before[1]) < 0.01 and abs(after[1]) > 0.2, (before, after)
+    planned = [nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, scan, LASER, FOOTPRINT).plan for i in range(25, 60)]
+    aims = [p.aim_xy for p in planned if p is not None]
+    assert aims and all(abs(aim[1]) > 0.2 for aim in aims), aims             # the planner steers round it
+    assert nav._closed_points(2.0 + CLOSED_FOR_S + 0.1, (0.0, 0.0, 0.0)) is None        # open again
 
 
 def test_without_a_goal_it_turns_back_to_the_start_heading():

@@ -147,7 +147,7 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
 
 
 def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0, scanned=None,
-         previous=None, corridor=None):
+         previous=None, corridor=None, closed=None):
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.control.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
@@ -158,7 +158,8 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     turn in place that way (it goes on that way rather than swing back and forth between two ways
     round), 0 otherwise; ``scanned``: the scan's points in the robot's frame if already computed;
     ``previous``: the command sent last (m/s, rad/s), which the step is taken from; ``corridor``: where
-    the way round may go (``closed_loop.control.wavefront.aim``'s), None for anywhere.
+    the way round may go (``closed_loop.control.wavefront.aim``'s), None for anywhere; ``closed``: points
+    (M, 2, the robot's frame) the way keeps off as it does the scan's (places closed to it), never for safety.
     """
     check_finite('v0, w0', v0, w0)
     check_finite('goal_xy', *goal_xy)
@@ -213,7 +214,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     # What the arcs are scored toward: a point along the way to the goal through the free space the scan
     # shows (closed_loop.control.wavefront), or the goal itself when it shows none.
     half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
-    seen = scanned if remembered is None or not len(remembered) else numpy.concatenate((scanned, remembered))
+    seen = numpy.concatenate([scanned] + [extra for extra in (remembered, closed) if extra is not None and len(extra)])
     way = wavefront.way(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
                         0.5 * (footprint.y_max - footprint.y_min), corridor)
     aim_xy = goal_xy if way is None else way.aim

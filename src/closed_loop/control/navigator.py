@@ -1,9 +1,9 @@
 """The reactive navigator: its settings, and the states over the local planner (``closed_loop.control.local_planner``).
 
-GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (back up where the scan sees the rear
-clear, then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
-REACHED within ``goal_tolerance`` of the goal; FAILED after ``give_up_timeout`` without progress. With no
-goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
+GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (close the place just ahead to the way
+for a while, back up where the scan sees the rear clear, then turn toward the side not tried last time) comes
+after ``stuck_timeout`` without progress; REACHED within ``goal_tolerance`` of the goal; FAILED after
+``give_up_timeout`` without progress. With no goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
 numbers. Free of ROS.
 """
 import dataclasses
@@ -38,7 +38,7 @@ class NavigatorSettings(LoopSettings):
                              maximum=6.0, live=True)
     goal_tolerance: float = param(0.1, 'm', 'REACHED within this distance of the goal', minimum=0.05,
                                   live=True)
-    memory_time: float = param(10.0, 's', 'scan points are remembered this long (in odom) to choose the way '
+    memory_time: float = param(60.0, 's', 'scan points are remembered this long (in odom) to choose the way '
                                'around (and, where the LIDAR cannot see, for safety); 0: no memory', minimum=0.0,
                                maximum=120.0, live=True)
     hold_lookahead: float = param(3.0, 'm', 'with no goal: aim this far ahead of the robot along the start '
@@ -124,6 +124,14 @@ BACKUP_SPEED_MPS = 0.15
 BACKUP_S = 1.0
 RECOVERY_TURN_RADPS = 0.8
 RECOVERY_TURN_S = 2.0
+#: Where it was stuck is closed to the way for CLOSED_FOR_S: a disc of CLOSED_RADIUS_M (drawn as points
+#: CLOSED_STEP_M apart round its centre, which the way keeps its half-width and margin from) CLOSED_AHEAD_M
+#: ahead of the robot, so the next way found leads elsewhere. Closed places are for the way only, never for
+#: safety.
+CLOSED_AHEAD_M = 0.35
+CLOSED_RADIUS_M = 0.3
+CLOSED_STEP_M = 0.1
+CLOSED_FOR_S = 60.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -146,9 +154,9 @@ class Navigator:
     ``hold_lookahead`` ahead of itself along the start heading, so after an obstacle it turns back to that
     heading (on a line beside the first one), and it never reaches anything; the way round keeps within
     ``hold_corridor`` of that line, so a wall across the whole way is a block it stops at, not a thing to
-    go round. No progress toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (back up
-    if the rear is clear, turn in place toward the other side than last time if that is safe, then seek
-    again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
+    go round. No progress toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (close the
+    place just ahead to the way for CLOSED_FOR_S, back up if the rear is clear, turn in place toward the
+    other side than last time if that is safe, then seek again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
     """
 
     def __init__(self, settings, start_pose, goal_xy=None, on_transition=None):
@@ -173,6 +181,7 @@ class Navigator:
         self._progress_s = now_s     # the last progress (give_up_timeout counts from it)
         self._stuck_from_s = now_s   # the last progress or the end of the last recovery (stuck_timeout)
         self._recovery = None
+        self._closed = []            # places closed to the way: (x, y) in odom, until when (s)
         self._command = None         # the first step is taken from the measured speed
         if self.state is not NavState.GOAL_SEEKING and now_s is not None:
             self._enter(NavState.GOAL_SEEKING, now_s, 'new goal')
@@ -236,7 +245,10 @@ class Navigator:
         elif now_s - self._stuck_from_s >= s.stuck_timeout:
             self._recovery = {'started_s': now_s, 'side': self._side}
             self._side = -self._side
-            self._enter(NavState.RECOVERING, now_s, 'no progress for %.1f s (stuck_timeout)' % stalled)
+            self._closed.append(((pose[0] + CLOSED_AHEAD_M * math.cos(pose[2]),
+                                  pose[1] + CLOSED_AHEAD_M * math.sin(pose[2])), now_s + CLOSED_FOR_S))
+            self._enter(NavState.RECOVERING, now_s, 'no progress for %.1f s (stuck_timeout): the place %.2f m '
+                        'ahead is closed to the way for %.0f s' % (stalled, CLOSED_AHEAD_M, CLOSED_FOR_S))
             step = self._recover(now_s, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
@@ -248,11 +260,26 @@ class Navigator:
             if step is not None:
                 return step
         p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
-                 self._scanned, self._command, self.corridor(pose))
+                 self._scanned, self._command, self.corridor(pose), self._closed_points(now_s, pose))
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
         return Step(state, p.linear_x, p.angular_z, p.reason, p)
+
+    def _closed_points(self, now_s, pose):
+        """The places closed to the way, as points (M, 2) in the robot's frame at ``pose`` (odom)."""
+        self._closed = [(xy, until) for xy, until in self._closed if until > now_s]
+        if not self._closed:
+            return None
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        n = max(3, int(math.ceil(2 * math.pi * CLOSED_RADIUS_M / CLOSED_STEP_M)))
+        around = 2 * math.pi * numpy.arange(n) / n
+        disc = numpy.concatenate(([[0.0, 0.0]], CLOSED_RADIUS_M * numpy.column_stack((numpy.cos(around),
+                                                                                     numpy.sin(around)))))
+        points = numpy.concatenate([disc + xy for xy, _ in self._closed])
+        dx, dy = points[:, 0] - x, points[:, 1] - y
+        return numpy.column_stack((c * dx + s * dy, -s * dx + c * dy))
 
     def _final_approach(self, now_s, goal_local, v0, w0, scan, laser_pose, footprint):
         """The last metre, where the window's coarse speeds would circle the goal: turn toward it, and drive
