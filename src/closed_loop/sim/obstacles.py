@@ -80,9 +80,15 @@ def point_on_path(points, cycle_m, distance_m):
     return points[-1]
 
 
+#: A static obstacle whose bounding circle is wider than this (m; a wall) is grouped with its kind, not among
+#: the small ones round it, whose patches its centre would stretch.
+LARGE_M = 1.0
+
+
 def static_groups(obstacles, most):
     """The static obstacles of ``obstacles`` in groups of at most ``most``, each a compact patch of the world: the
-    patch split at the median of its centres along its longer side until each part is small enough."""
+    patch split at the median of its centres along its longer side until each part is small enough; the large
+    ones (LARGE_M) are split so among themselves."""
     def split(group):
         if len(group) <= most:
             return [group]
@@ -93,4 +99,6 @@ def static_groups(obstacles, most):
         half = len(ordered) // 2
         return split(ordered[:half]) + split(ordered[half:])
     static = [o for o in obstacles if o.motion is None]
-    return split(static) if static else []
+    large = [o for o in static if shapes.bounding_radius(o) > LARGE_M]
+    small = [o for o in static if shapes.bounding_radius(o) <= LARGE_M]
+    return [group for part in (small, large) if part for group in split(part)]
