@@ -2,7 +2,7 @@
 """demo.launch rviz:=true in a real rviz on a virtual screen (Xvfb): once the robot has moved, a screenshot
 shows the scan points (magenta, rviz/closed_loop.rviz), the robot model (its URDF blue) and the red box itself
 (world_markers, in the world frame that TF joins to odom) in the 3D view and a camera image that is not blank (the red box, outside the 3D view); the launch log has no error. avoid.launch rviz:=true: rviz
-subscribes to the navigator's ~plan and draws its aim.
+subscribes to the navigator's ~window, ~plan and ~map, and draws the window's aim and the plan.
 Skipped, with the reason, only where Xvfb cannot start."""
 import os
 import re
@@ -68,16 +68,22 @@ class RvizDisplay(unittest.TestCase):
         return rgb, text, log_path, topics
 
     def test_rviz_shows_the_navigators_plan(self):
-        # avoid.launch rviz:=true: the shipped config subscribes to the navigator's ~plan, and its aim (a
-        # purple sphere, a colour nothing else in the config uses) is drawn in the 3D view.
+        # avoid.launch rviz:=true: the shipped config subscribes to the navigator's ~window, ~plan and ~map;
+        # the window's aim (a purple sphere), the plan (a yellow path) and the map (lime-green cells) are drawn in the 3D view, colours
+        # nothing else in the config uses.
         rgb, text, log_path, topics = self._screenshot(
             'avoid_rviz', ['avoid.launch', 'world:=obstacle_left', 'camera:=false', 'rviz:=true'], moved_m=1.0)
-        self.assertIn('/avoid_obstacles/plan', topics)
+        for topic in ('/avoid_obstacles/window', '/avoid_obstacles/plan', '/avoid_obstacles/map'):
+            self.assertIn(topic, topics)
         box = view_box(rgb)
         self.assertIsNotNone(box, 'no 3D view (background colour) on the screen')
         x0, y0, x1, y1 = box
         purple = colour_mask(rgb, lambda r, g, b: (b > 120) & (g < 0.5 * b) & (r > 0.45 * b) & (r < 0.8 * b))
-        self.assertGreater(int(purple[y0:y1, x0:x1].sum()), MIN_PIXELS, 'no aim of the plan in the 3D view')
+        self.assertGreater(int(purple[y0:y1, x0:x1].sum()), MIN_PIXELS, 'no aim of the window in the 3D view')
+        lime = colour_mask(rgb, lambda r, g, b: (r > 100) & (r < 160) & (g > 230) & (b < 60))
+        self.assertGreater(int(lime[y0:y1, x0:x1].sum()), MIN_PIXELS, 'no map (what it remembers) in the 3D view')
+        yellow = colour_mask(rgb, lambda r, g, b: (r > 220) & (g > 220) & (b < 60))
+        self.assertGreater(int(yellow[y0:y1, x0:x1].sum()), MIN_PIXELS, 'no plan (the way) in the 3D view')
         bad = [line.strip() for line in text.splitlines() if BAD_LOG.search(line)]
         self.assertEqual(bad, [], 'errors in the launch log (%s)' % log_path)
 

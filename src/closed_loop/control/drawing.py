@@ -1,10 +1,12 @@
 """What a controller shows of its thinking, as plain data: the controller host turns each into a message
 (``closed_loop.nodes.drawing_messages``) and publishes it on the controller's private topic of that name
-(``~plan``, ``~tracks``, ``~belief``, ``~goal``), and an episode can keep it. Free of ROS.
+(``~window``, ``~plan``, ``~map``, ``~tracks``, ``~belief``, ``~goal``), and an episode can keep it. Free of
+ROS.
 
 A controller declares its outputs once, as {name: kind} with kinds :class:`Drawing` (an rviz
-MarkerArray), :class:`Note` (a JSON text on std_msgs/String) and :class:`Goal` (a latched
-geometry_msgs/PoseStamped in odom), and after each decision returns those that have news.
+MarkerArray), :class:`Note` (a JSON text on std_msgs/String), :class:`Goal` (a latched
+geometry_msgs/PoseStamped in odom) and :class:`Route` (a nav_msgs/Path in odom), and after each decision
+returns those that have news.
 """
 import dataclasses
 from typing import Optional, Tuple
@@ -60,4 +62,10 @@ class Note:
 class Goal:
     """The goal being followed, (x, y) m in odom; None: none (holding a heading)."""
     xy: Optional[Tuple[float, float]]
+
+
+@dataclasses.dataclass(frozen=True)
+class Route:
+    """A way to follow, as (x, y) m points in odom from the robot onwards (a nav_msgs/Path); () for none."""
+    points: tuple = ()
 

@@ -62,7 +62,8 @@ class NavigatorError(ValueError):
 class Plan:
     """The planner's answer: the command (m/s, rad/s), what it is and why, the chosen path's least
     clearance (m), the predicted poses of the chosen command ((K, 3) x, y, yaw in the robot's frame), and
-    every candidate's (v, w, clearance, safe) and the point aimed at, for display."""
+    every candidate's (v, w, clearance, safe), the point aimed at and the way to the goal it lies on
+    (``closed_loop.control.wavefront.Way``, None where the scan showed none), for display."""
     linear_x: float
     angular_z: float
     kind: str          # 'goal' (heading for it), 'avoid' (steering around), 'turn' (in place), 'stop'
@@ -72,6 +73,7 @@ class Plan:
     candidates: numpy.ndarray
     aim_xy: tuple = (0.0, 0.0)   # the point the arcs were scored toward (the robot's frame, m)
     target: tuple = (0.0, 0.0)   # the chosen candidate (m/s, rad/s), which the command steps toward
+    way: object = None
 
 
 def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
@@ -224,13 +226,13 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
         if math.hypot(*way.goal) <= BLOCKED_STOP_M:
             why = ('the way along the start heading is closed off %.2f m ahead (no way round within '
                    'hold_corridor): stopped before it' % math.hypot(*way.goal))
-            return Plan(0.0, 0.0, 'stop', why, now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+            return Plan(0.0, 0.0, 'stop', why, now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)
         if way.aim == way.goal:
             aim_xy = goal_xy
     if not (safe | maybe).any():
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
                     '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
-                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)
     # How long each arc runs before it would come within the margin (1: the whole lookahead), and where its
     # free part comes closest to the goal (its end, unless it passes the goal): how far that is, how much
     # closer than now, pointing how well at the goal, with how much room around it.
@@ -258,7 +260,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     if best is None:
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
                     '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
-                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy))
+                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)
     turns = (safe | maybe) & (v == 0.0) & (w != 0.0)
     if v[best] == 0.0 and w[best] == 0.0 and turns.any() and (v > 0).any():
         # Standing still beats every way forward: turn in place rather than stand facing the obstacle,
@@ -296,4 +298,5 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
         kind, why = 'avoid', 'steering around an obstacle %.2f m from the path' % max(cb, 0.0)
     else:
         kind, why = 'goal', 'heading for the goal %.2f m away' % goal_distance
-    return Plan(vb, wb, kind, why, cb, arcs[best], candidates, tuple(aim_xy), (float(v[best]), float(w[best])))
+    return Plan(vb, wb, kind, why, cb, arcs[best], candidates, tuple(aim_xy), (float(v[best]), float(w[best])),
+                way)

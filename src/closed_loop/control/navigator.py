@@ -206,6 +206,11 @@ class Navigator:
         c, s = math.cos(yaw), math.sin(yaw)
         return (c * dx + s * dy, -s * dx + c * dy), progress
 
+    def remembered(self):
+        """What it remembers of the scans, as :meth:`closed_loop.control.scan_memory.ScanMemory.occupancy` gives
+        it (odom)."""
+        return self._memory.occupancy()
+
     def corridor(self, pose):
         """With no goal, the line along the start heading through the robot and ``hold_corridor``, in the
         robot's frame (for :func:`closed_loop.control.wavefront.way`); None with a goal."""

@@ -64,3 +64,15 @@ class ScanMemory:
         c, s = math.cos(yaw), math.sin(yaw)
         dx, dy = self.xy[:, 0] - x, self.xy[:, 1] - y
         return numpy.column_stack((c * dx + s * dy, -s * dx + c * dy))
+
+    def occupancy(self):
+        """What is remembered as a grid in odom: (origin (x, y) m of cell (0, 0)'s corner, (rows, columns) bool,
+        True where a point is, row i at y = origin y + i CELL_M); a single empty cell when nothing is."""
+        if not len(self.xy):
+            return (0.0, 0.0), numpy.zeros((1, 1), bool)
+        cells = numpy.floor(self.xy / CELL_M).astype(numpy.int64)
+        low = cells.min(axis=0)
+        size = cells.max(axis=0) - low + 1
+        grid = numpy.zeros((size[1], size[0]), bool)
+        grid[cells[:, 1] - low[1], cells[:, 0] - low[0]] = True
+        return (float(low[0] * CELL_M), float(low[1] * CELL_M)), grid

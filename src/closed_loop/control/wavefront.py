@@ -41,8 +41,9 @@ _SQUARE = numpy.ones((3, 3), numpy.uint8)
 _NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
 
 #: What :func:`way` found: the point to steer for, and the goal the way leads to (the goal given, or the
-#: point a corridor's line is closed off at), both (x, y) in the robot's frame.
-Way = collections.namedtuple('Way', 'aim goal')
+#: point a corridor's line is closed off at), both (x, y) in the robot's frame; ``route()``: the whole way
+#: as (N, 2) points there, from the robot to that goal (worked out only when asked: a display's).
+Way = collections.namedtuple('Way', 'aim goal route')
 
 
 def _box(goal_xy):
@@ -108,14 +109,15 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
             goal_cell, (gx, gy) = cell, point
             goal_xy = (gx, gy)
             if _in_sight(in_sight, start, cell):
-                return Way(goal_xy, goal_xy)     # straight up to where the line is closed off
+                # Straight up to where the line is closed off.
+                return Way(goal_xy, goal_xy, lambda: numpy.array([(0.0, 0.0), goal_xy]))
     if not passable[goal_cell]:
         return None
     goal = goal_xy if math.hypot(*goal_xy) <= MAX_BOX_M - 2 * BOX_MARGIN_M else (gx, gy)
     if start == here and _in_sight(passable, start, goal_cell):
         # The straight line is the way: the aim is on it, exactly (not at a cell's centre).
         scale = min(1.0, aim_m / max(math.hypot(*goal), 1e-9))
-        return Way((goal[0] * scale, goal[1] * scale), tuple(goal))
+        return Way((goal[0] * scale, goal[1] * scale), tuple(goal), lambda: numpy.array([(0.0, 0.0), tuple(goal)]))
     # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter; ``count`` adds one
     # per round to every cell reached, so a cell reached in round m (the goal in round 0) ends with
     # rounds + 1 - m, from which its step count is read back.
@@ -139,13 +141,33 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
         cv2.add(count, seen, dst=count)
         front = grown
     steps = numpy.where(seen > 0, k + 1 - count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
-    # Down the wave from the start, aim_m of path. Many ways are equally short on a grid; of the steps down,
-    # the one nearest to the goal in a straight line is taken, so in the open the aim is on the goal's line.
+    # Down the wave from the start, aim_m of path. The aim is the farthest point of the way in sight of the
+    # start through passable cells: steering for a point beyond a bend would cut the corner into what the
+    # way goes round.
+    cells = _descend(steps, start, goal_cell, aim_m, lambda cell: _in_sight(in_sight, start, cell))
+    centre = (lambda cell: (x0 + (cell[1] + 0.5) * CELL_M, y0 + (cell[0] + 0.5) * CELL_M))
+    route = (lambda: _route([centre(cell) for cell in _descend(steps, start, goal_cell)], goal))
+    if steps[cells[-1]] == 0:
+        return Way(tuple(goal), tuple(goal), route)
+    return Way(centre(cells[-1]), tuple(goal), route)
+
+
+def _route(points, goal):
+    """(N, 2): the robot (the origin), the cells' centres down the wave and the goal exactly."""
+    return numpy.array([(0.0, 0.0)] + points[1:-1] + [tuple(goal)])
+
+
+def _descend(steps, start, goal_cell, limit_m=math.inf, keep=None):
+    """The cells down the wave from ``start``: to the goal's, or until ``limit_m`` of way or the first cell
+    for which ``keep`` (if given) is False (that cell left out). Many ways are equally short on a grid; of
+    the steps down, the one nearest to the goal in a straight line is taken, so in the open the way is on
+    the goal's line."""
+    rows, cols = steps.shape
     i, j = start
     gi, gj = goal_cell
     travelled = 0.0
-    aim_cell = start
-    while steps[i, j] > 0 and travelled < aim_m:
+    cells = [start]
+    while steps[i, j] > 0 and travelled < limit_m:
         best = None
         for di, dj in _NEIGHBOURS:
             ni, nj = i + di, j + dj
@@ -158,14 +180,10 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
         _, ni, nj = best
         travelled += CELL_M * math.hypot(ni - i, nj - j)
         i, j = ni, nj
-        # The aim is the farthest point of the way in sight of the start through passable cells: steering
-        # for a point beyond a bend would cut the corner into what the way goes round.
-        if not _in_sight(in_sight, start, (i, j)):
+        if keep is not None and not keep((i, j)):
             break
-        aim_cell = (i, j)
-    if steps[aim_cell] == 0:
-        return Way(tuple(goal), tuple(goal))
-    return Way((x0 + (aim_cell[1] + 0.5) * CELL_M, y0 + (aim_cell[0] + 0.5) * CELL_M), tuple(goal))
+        cells.append((i, j))
+    return cells
 
 
 def _farthest_on_line(passable, start, corridor, origin, goal_xy):

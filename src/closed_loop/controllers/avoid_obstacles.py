@@ -7,18 +7,23 @@ first odometry. A scan that makes the command being followed unsafe (its predict
 ``safety_margin`` of the scan) is acted on at once. A missing or stale scan or odometry (older than
 ``scan_timeout``) means zero. Its mode: GOAL_SEEKING, AVOIDING, RECOVERING, REACHED or FAILED.
 
-Drawings: ``plan`` (in the base frame: the chosen arc coloured by what it is, every candidate's end, blue
-if safe and red if not, and the point the arcs were scored toward) and ``goal`` (the goal being followed).
+Drawings: ``window`` (in the base frame: the chosen arc coloured by what it is, every candidate's end, blue
+if safe and red if not, and the point the arcs were scored toward), ``plan`` (nav_msgs/Path in odom: the
+way to the goal that point lies on, through what the scans show), ``map`` (in odom, at most once every MAP_PERIOD_S:
+the 0.1 m cells where it remembers a scan point, lime green) and ``goal`` (the goal being followed).
 """
 import math
 import time
 
-from closed_loop.control.drawing import Drawing, Goal, Shape
+import numpy
+
+from closed_loop.control.drawing import Drawing, Goal, Route, Shape
 from closed_loop.control.guard import scan_points
 from closed_loop.control.local_planner import NavigatorError
 from closed_loop.control.loop import stale_input
 from closed_loop.control.markers import arrow_end
 from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger
+from closed_loop.control.scan_memory import CELL_M
 from closed_loop.control.scan import ScanError, validate_scan
 from closed_loop.controllers import STOP, Controller, ControllerError
 
@@ -26,8 +31,11 @@ PLAN_COLOURS = {'goal': (0.1, 0.85, 0.2, 1.0), 'avoid': (1.0, 0.75, 0.0, 1.0), '
                 'stop': (0.95, 0.1, 0.1, 1.0)}
 SAFE_COLOUR, UNSAFE_COLOUR = (0.3, 0.6, 1.0, 0.8), (0.95, 0.1, 0.1, 0.5)
 AIM_COLOUR = (0.6, 0.2, 0.9, 1.0)   # purple: no other display of the shipped rviz config uses it
+MAP_COLOUR = (0.5, 1.0, 0.0, 1.0)   # lime: nor this
 #: Drawn this high above the ground (m), so the plan shows over the scan's points.
 DRAW_Z_M = 0.05
+#: The remembered map is sent at most this often (s of the node's clock), as a costmap is.
+MAP_PERIOD_S = 1.0
 
 
 class AvoidObstacles(Controller):
@@ -37,7 +45,7 @@ class AvoidObstacles(Controller):
     ends_at_rest = False
     uses_odom = uses_goal = needs_footprint = True
     warn_modes = (NavState.RECOVERING.name, NavState.FAILED.name)
-    outputs = {'plan': Drawing, 'goal': Goal}
+    outputs = {'window': Drawing, 'plan': Route, 'map': Drawing, 'goal': Goal}
 
     def __init__(self, settings, context, goal_settings=None, *extra_settings):
         Controller.__init__(self, settings, context)
@@ -47,6 +55,8 @@ class AvoidObstacles(Controller):
         self.scan = None
         self.sent = STOP
         self.step = None            # the last decision's navigator step
+        self.pose = None            # the pose (odom) it was taken at
+        self._map_sent_s = None
         self._news = set()          # outputs with news since drawings() was last asked
         #: The wall time (ms) of each decision that planned, when ``record_timings`` is set (benchmarks).
         self.record_timings = False
@@ -127,7 +137,11 @@ class AvoidObstacles(Controller):
         if step.plan is not None:
             if self.record_timings:
                 self.decision_ms.append((time.perf_counter() - started) * 1e3)
-            self._news.add('plan')
+            self._news.update(('window', 'plan'))
+        if self._map_sent_s is None or not 0.0 <= now_s - self._map_sent_s < MAP_PERIOD_S:
+            self._map_sent_s = now_s
+            self._news.add('map')
+        self.pose = (odom.x, odom.y, odom.yaw)
         self.fault = None
         self.sent = (step.linear_x, step.angular_z)
         self.step = step
@@ -150,11 +164,35 @@ class AvoidObstacles(Controller):
         out = {}
         if 'goal' in news and 'goal' in wanted and self.goal is not None:
             out['goal'] = Goal(self.navigator.goal)
-        if 'plan' in news and 'plan' in wanted and self.step is not None and self.step.plan is not None:
-            out['plan'] = self.plan_drawing(self.step.plan)
+        plan = None if self.step is None else self.step.plan
+        if 'window' in news and 'window' in wanted and plan is not None:
+            out['window'] = self.window_drawing(plan)
+        if 'plan' in news and 'plan' in wanted and plan is not None:
+            out['plan'] = self.route(plan, self.pose)
+        if 'map' in news and 'map' in wanted and self.navigator is not None:
+            out['map'] = self.map_drawing(self.navigator.remembered())
         return out
 
-    def plan_drawing(self, plan):
+    @staticmethod
+    def map_drawing(remembered):
+        """What the navigator remembers, in odom: a square on each cell where it holds a scan point."""
+        (x0, y0), occupied = remembered
+        rows, cols = numpy.nonzero(occupied)
+        cells = tuple((float(x0 + (j + 0.5) * CELL_M), float(y0 + (i + 0.5) * CELL_M), DRAW_Z_M)
+                      for i, j in zip(rows, cols))
+        return Drawing('odom', (Shape('points', 'remembered', 0, MAP_COLOUR, (CELL_M, CELL_M, 0.0), cells),),
+                       clear=True)
+
+    @staticmethod
+    def route(plan, pose):
+        """The way ``plan`` aimed along, in odom from ``pose`` (x, y, yaw): from the robot to the goal; to the
+        goal straight where the scan showed no way."""
+        points = numpy.array([(0.0, 0.0), plan.aim_xy]) if plan.way is None else plan.way.route()
+        x, y, yaw = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        return Route(tuple((float(x + c * px - s * py), float(y + s * px + c * py)) for px, py in points))
+
+    def window_drawing(self, plan):
         """The plan in the base frame: the chosen arc, every candidate's end, and the aim."""
         chosen = Shape('line', 'chosen', 0, PLAN_COLOURS.get(plan.kind, PLAN_COLOURS['goal']), (0.03, 0.0, 0.0),
                        ((0.0, 0.0, DRAW_Z_M),) + tuple((float(x), float(y), DRAW_Z_M) for x, y, _ in plan.path))

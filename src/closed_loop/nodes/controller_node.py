@@ -66,9 +66,9 @@ class ControllerNode(StopsOnShutdown):
     clock (``1 / ~rate_hz``), at once where a scan brings new danger, zero from the wall-clock watchdog (no
     scan for ``~scan_timeout`` s: a dead simulator stops ``/clock`` and with it the timer) and on shutdown.
     ``~mode`` (std_msgs/String, latched): the core's mode, on every change, each logged once with why (as a
-    warning for the modes the core names). The core's drawings, each on ``~NAME`` (``~plan``, ``~tracks``:
-    visualization_msgs/MarkerArray; ``~belief``: std_msgs/String, JSON; ``~goal``: geometry_msgs/PoseStamped,
-    latched), built only while someone listens.
+    warning for the modes the core names). The core's drawings, each on ``~NAME`` (``~window``, ``~map``,
+    ``~tracks``: visualization_msgs/MarkerArray; ``~plan``: nav_msgs/Path; ``~belief``: std_msgs/String, JSON; ``~goal``: geometry_msgs/PoseStamped, latched), built only while
+    someone listens.
 
     Parameters: the core's settings classes, each field a ``~parameter`` (docs/nodes.md), the live ones
     served by dynamic_reconfigure (``dynparam set /NODE NAME VALUE``; a change the settings class refuses is

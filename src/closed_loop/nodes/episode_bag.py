@@ -5,7 +5,7 @@ have carried: the simulator node's topics (``/clock``, ``/scan``, ``/odom``, ``/
 ``/tf`` with world -> odom -> base, ``/joint_states``, ``/clearance``, ``/contact``, ``/contact_count``,
 ``/world_markers``, and the camera where it was on), ``/tf_static`` (the URDF's fixed joints, as
 robot_state_publisher sends them), and the controller's: ``/cmd_vel``, ``/NAME/mode`` and its drawings
-(``/NAME/plan``, ...). The messages are the simulator node's and the controller node's own conversions
+(``/NAME/plan``, ``/NAME/map``, ...). The messages are the simulator node's and the controller node's own conversions
 (``closed_loop.nodes.sensor_messages``, ``closed_loop.nodes.drawing_messages``), each sensor on its own
 schedule (``closed_loop.sim.scheduler``), from the readings the controller got (the bag never samples the
 LIDAR or the contacts a second time: their noise and state would change the run). It then checks that the
