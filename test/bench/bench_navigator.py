@@ -23,6 +23,9 @@ The BARN-method set (``closed_loop.sim.barn``, smoothing 2): fills BARN_FILLS (f
 pockets), seeds from 0 (a seed whose field leaves no way for the robot is passed over for the next). Scored as
 the benchmark scores a run: success x optimal time / its time clipped between 2 and 8 optimal times, the
 optimal time being the world's shortest footprint-feasible way (``barn.way_length``) at the robot's top speed.
+Beside the score, how many of the fill's worlds have a way for the footprint with the room the window's way
+keeps round it (``safety_margin`` + ``local_planner.AIM_ROOM_M`` each side, ``barn.has_way``): how tight the
+worlds are for this navigator (a guide, not a bound: the lattice turns by 45 degrees, the robot by any angle).
 
 Targets: success at least 90 %, zero contacts in every run, decision p99 under 5 ms. Figures, not pass/fail:
 the exit status is non-zero only when an episode could not run.
@@ -40,7 +43,7 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop.sim import barn, generators  # noqa: E402
 from closed_loop.sim.clutter import ClutterSettings, generate, narrowest_gap, robot_extent  # noqa: E402
-from closed_loop.control import navigator as navigator_module  # noqa: E402
+from closed_loop.control import local_planner, navigator as navigator_module  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 
@@ -96,8 +99,9 @@ class Recorder:
         return times
 
 
-def barn_worlds(seeds, profile):
-    """[(the world's generator values, its optimal way m)], ``seeds`` per fill of BARN_FILLS."""
+def barn_worlds(seeds, profile, room_m):
+    """[(the world's generator values, (its optimal way m, whether it has a way for the footprint with
+    ``room_m`` round it)], ``seeds`` per fill of BARN_FILLS."""
     worlds = []
     for fill in BARN_FILLS:
         seed = 0
@@ -109,7 +113,9 @@ def barn_worlds(seeds, profile):
                     world = generators.generate(settings, profile)
                 except generators.GeneratorError:
                     continue
-                worlds.append((values, barn.way_length(settings, barn.field_of_world(settings, world), profile)[0]))
+                field = barn.field_of_world(settings, world)
+                worlds.append((values, (barn.way_length(settings, field, profile)[0],
+                                        barn.has_way(settings, field, profile, room_m))))
                 break
             seed += 1
     return worlds
@@ -145,7 +151,10 @@ def run_set(method, args):
     top_speed = profile.node_params('avoid_obstacles').get('max_speed', navigator_module.NavigatorSettings().max_speed)
     barn_set = method == 'barn'
     seeds = args.seeds or (50 if barn_set else 10)
-    worlds = barn_worlds(seeds, profile) if barn_set else clutter_worlds(seeds, profile)
+    # The room the window's way keeps each side of the robot: a world with no way that wide is one the navigator
+    # cannot cross (its aim closes every gap narrower).
+    room_m = navigator_module.NavigatorSettings().safety_margin + local_planner.AIM_ROOM_M
+    worlds = barn_worlds(seeds, profile, room_m) if barn_set else clutter_worlds(seeds, profile)
     rows = collections.defaultdict(list)
     decisions = []
     recorder = Recorder(max(1, len(worlds) // REPLAY_RUNS))
@@ -153,7 +162,8 @@ def run_set(method, args):
     for values, extra in worlds:
         if barn_set:
             raw = generators.generate(generators.settings_from(values, profile.name), profile)
-            goal, group, optimal_s = None, values['fill'], extra / top_speed
+            (optimal_m, roomy), goal, group = extra, None, values['fill']
+            optimal_s = (optimal_m / top_speed, roomy)
         else:
             raw = generate(ClutterSettings(profile=profile.name, **values), profile)
             goal, group, optimal_s = extra, values['fill_ratio'], None
@@ -170,18 +180,20 @@ def run_set(method, args):
     print('%s, %d %s worlds, %.0f s limit (%.0f s wall)'
           % (profile.name, len(worlds), 'BARN-method' if barn_set else 'generated', TIME_LIMIT_S,
              time.monotonic() - started))
-    print('%-6s %-10s %-12s %-9s %-9s %-13s %-14s %s' % ('fill', 'obstacles', 'score' if barn_set else 'narrowest',
+    print('%-6s %-10s %-12s %-9s %-9s %-13s %-14s %s' % ('fill', 'obstacles', 'score  room' if barn_set else 'narrowest',
                                                         'success', 'contacts', 'time to goal', 'min clearance',
                                                         'other outcomes'))
-    total = successes = contacts = 0
+    total = successes = contacts = roomy_total = 0
     scores = []
     for group, results in rows.items():
         reached = [r for r, _, _ in results if r.outcome == 'reached']
         others = collections.Counter(r.outcome for r, _, _ in results if r.outcome != 'reached')
         if barn_set:
-            group_scores = [score(r, optimal_s) for r, _, optimal_s in results]
+            group_scores = [score(r, optimal_s) for r, _, (optimal_s, _) in results]
             scores.extend(group_scores)
-            third = '%.3f' % numpy.mean(group_scores)
+            group_roomy = sum(roomy for _, _, (_, roomy) in results)
+            roomy_total += group_roomy
+            third = '%-7.3f %d/%d' % (numpy.mean(group_scores), group_roomy, len(results))
         else:
             gap = min(g for _, _, g in results)
             third = '%.2f m %.2fw' % (gap, gap / width)
@@ -199,7 +211,8 @@ def run_set(method, args):
     a50, a99 = numpy.percentile(alone, [50, 99])
     print('success %.0f%% (%d/%d; target at least %.0f%%), contacts %d (target 0)%s'
           % (100.0 * successes / total, successes, total, 100 * TARGET_SUCCESS, contacts,
-             ', score %.3f (the benchmark\'s; optimal times at %.1f m/s)' % (numpy.mean(scores), top_speed)
+             ', score %.3f (the benchmark\'s; optimal times at %.1f m/s); %d/%d worlds have a way for the footprint '
+             'with the room the window keeps (%.2f m)' % (numpy.mean(scores), top_speed, roomy_total, total, room_m)
              if barn_set else ''))
     print('decision cost over %d decisions (target p99 under %.0f ms): p50 %.2f ms, p99 %.2f ms replayed alone '
           '(as the node, in its own process); p50 %.2f ms, p99 %.2f ms in the episode loop, between physics steps'

@@ -98,6 +98,19 @@ def test_a_barn_world_is_the_same_for_the_same_seed_and_has_its_way():
     assert len(load_world_ok.obstacles) == len(world['obstacles']) and load_world_ok.goal == (10.0, 0.0)
 
 
+def test_a_way_with_more_room_than_the_guarantee_may_be_missing_and_one_wider_than_the_field_always_is():
+    settings = barn_settings(seed=3, fill=0.45, smoothing=3)
+    field = barn.field_of_world(settings, barn.generate(settings, JACKAL))
+    assert barn.has_way(settings, field, JACKAL, settings.margin)            # the guarantee itself
+    assert not barn.has_way(settings, field, JACKAL, 0.5 * settings.width_cells * settings.cell_m)
+    # An empty field has a way for any room the side walls leave.
+    empty = numpy.zeros_like(field)
+    assert barn.has_way(settings, empty, JACKAL, 0.5)
+    margins = [0.05, 0.1, 0.15, 0.2, 0.3]
+    found = [barn.has_way(settings, field, JACKAL, m) for m in margins]
+    assert found == sorted(found, reverse=True)                              # more room: never more ways
+
+
 def test_walls_close_the_way_round_so_the_field_cannot_be_gone_round():
     # The way out of the start's and the goal's box is only through the field: every ray from the start and from
     # the goal meets a wall or a post within the box (as the LIDAR's planar caster sees them).

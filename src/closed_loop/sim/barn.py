@@ -22,6 +22,7 @@ of the paper (``closed_loop.sim.barn_metrics``) are computed on request and writ
 comment. ``python3 -m closed_loop.sim.clutter --method barn`` (``generate_world``) writes such worlds. Free of
 ROS.
 """
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -200,6 +201,14 @@ def field_of_world(settings, world):
             _, r, c = ob['name'].split('_')
             field[int(r), int(c)] = True
     return field
+
+
+def has_way(settings, field, profile, margin_m):
+    """True if the footprint grown by ``margin_m`` (not the settings' margin) can get from the start to the
+    goal of ``field`` on the lattice: whether a robot keeping that much room can cross this world at all."""
+    layout = Layout(dataclasses.replace(settings, margin=margin_m))
+    lattice, offset = layout.lattice(field, profile)
+    return lattice.reachable(layout.start_state(offset), layout.goal_mask(offset))
 
 
 def way_length(settings, field, profile):
