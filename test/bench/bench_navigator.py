@@ -180,7 +180,8 @@ def run_set(method, args):
     print('%s, %d %s worlds, %.0f s limit (%.0f s wall)'
           % (profile.name, len(worlds), 'BARN-method' if barn_set else 'generated', TIME_LIMIT_S,
              time.monotonic() - started))
-    print('%-6s %-10s %-12s %-9s %-9s %-13s %-14s %s' % ('fill', 'obstacles', 'score  room' if barn_set else 'narrowest',
+    third = 'score   room' if barn_set else 'narrowest'
+    print('%-6s %-10s %-14s %-9s %-9s %-13s %-14s %s' % ('fill', 'obstacles', third,
                                                         'success', 'contacts', 'time to goal', 'min clearance',
                                                         'other outcomes'))
     total = successes = contacts = roomy_total = 0
@@ -197,7 +198,7 @@ def run_set(method, args):
         else:
             gap = min(g for _, _, g in results)
             third = '%.2f m %.2fw' % (gap, gap / width)
-        print('%-6.2f %-10s %-12s %-9s %-9d %-13s %-14s %s' % (
+        print('%-6.2f %-10s %-14s %-9s %-9d %-13s %-14s %s' % (
             group, '%.0f' % numpy.mean([n for _, n, _ in results]), third,
             '%d/%d' % (len(reached), len(results)), sum(r.contacts for r, _, _ in results),
             '%.1f s' % numpy.mean([r.time_s for r in reached]) if reached else '-',
