@@ -105,6 +105,23 @@ def test_backing_away_from_a_wall_already_too_close_is_allowed():
     assert run(points, 0.0, 0.0, 0.3, 0.0).verdict == guard.GuardVerdict.VETOED
 
 
+def test_inside_the_margin_no_point_comes_closer_not_only_the_nearest():
+    # A post 0.04 m off the left side (the nearest point) and a wall 0.08 m ahead, both within the margin.
+    # Creeping ahead keeps the least clearance (the post's) but brings the wall closer: vetoed.
+    post = [(0.0, FOOTPRINT.y_max + 0.04)]
+    wall = [(FOOTPRINT.x_max + 0.08, y) for y in numpy.arange(-0.5, 0.5, 0.01)]
+    points = guard.scan_points(scan_of(post + wall), LASER)
+    now = guard.footprint_clearance(points, FOOTPRINT, 0.0, 0.0, 0.0)
+    assert now == pytest.approx(0.04, abs=0.005)
+    creep = guard.predicted_poses(0.0, 0.0, 0.06 * 0.3, 0.0, SETTINGS)
+    assert guard.path_clearance(points, FOOTPRINT, creep) >= now - guard.CLEARANCE_EPS_M   # the old rule's pass
+    assert run(post + wall, 0.0, 0.0, 0.3, 0.0).verdict == guard.GuardVerdict.VETOED
+    # Backing away from both passes; so does the same creep with the wall beyond the margin's reach.
+    assert run(post + wall, 0.0, 0.0, -0.3, 0.0).verdict == guard.GuardVerdict.PASS
+    far_wall = [(FOOTPRINT.x_max + 0.6, y) for y in numpy.arange(-0.5, 0.5, 0.01)]
+    assert run(post + far_wall, 0.0, 0.0, 0.1, 0.0).verdict == guard.GuardVerdict.PASS
+
+
 def test_turning_in_place_that_swings_a_corner_into_a_box_is_vetoed():
     # A point just off the front-left corner: turning left swings the corner into it.
     points = [(0.16, 0.2)]

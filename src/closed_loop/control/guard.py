@@ -4,8 +4,10 @@ Given the latest scan (as points in base_footprint), the robot's footprint recta
 its current velocity and a commanded velocity, :func:`filter_command` predicts the path the base would
 take if it followed the command for ``reaction_time`` and then braked at ``braking_decel`` (linear)
 and ``angular_decel`` (yaw), and measures the footprint's clearance to every scan point along that path.
-The command passes if the clearance stays at least ``safety_margin`` (or, when the robot is already
-closer than that, if it never shrinks). Otherwise the command is scaled down, keeping its curvature,
+The command passes if the clearance stays at least ``safety_margin``; when the robot is already closer
+than that to some points, if none of those comes closer and none of the others comes within the margin
+(judged point by point: the least clearance alone would let the robot creep toward one obstacle while the
+nearest is another, beside it). Otherwise the command is scaled down, keeping its curvature,
 to the largest safe fraction; where none is safe the answer is zero (brake). This is the scheme of the
 ecosystem's safety limiters: predict, then limit; it knows nothing of the controller in front of it.
 
@@ -95,13 +97,18 @@ def footprint_clearances(points, footprint, poses):
     """Least distance (m) from the footprint at each of ``poses`` ((P, 3): x, y, yaw) to ``points`` (N, 2)."""
     if len(points) == 0:
         return numpy.full(len(poses), math.inf)
+    return numpy.min(_point_clearances(points, footprint, poses), axis=1)
+
+
+def _point_clearances(points, footprint, poses):
+    """(P, N): the distance (m) from the footprint at each of ``poses`` to each of ``points`` (N >= 1)."""
     poses = numpy.asarray(poses, dtype=float).reshape(-1, 3)
     c, s = numpy.cos(poses[:, 2:3]), numpy.sin(poses[:, 2:3])
     dx, dy = points[None, :, 0] - poses[:, 0:1], points[None, :, 1] - poses[:, 1:2]
     px, py = c * dx + s * dy, -s * dx + c * dy
     ox = numpy.maximum(numpy.maximum(footprint.x_min - px, px - footprint.x_max), 0.0)
     oy = numpy.maximum(numpy.maximum(footprint.y_min - py, py - footprint.y_max), 0.0)
-    return numpy.min(numpy.hypot(ox, oy), axis=1)
+    return numpy.hypot(ox, oy)
 
 
 def footprint_clearance(points, footprint, x, y, yaw):
@@ -154,9 +161,19 @@ def path_clearance(points, footprint, poses):
     return float(numpy.min(footprint_clearances(near, footprint, poses)))
 
 
-def is_safe(clearance_now, clearance_path, margin):
-    """Safe: the path keeps ``margin``, or (already closer than that) never gets closer than now."""
-    return clearance_path >= margin or clearance_path >= clearance_now - CLEARANCE_EPS_M
+def keeps_room(points, footprint, poses, margin):
+    """(safe, least clearance m over ``poses``): safe when no point comes within ``margin`` of the footprint
+    along ``poses``, except one already closer at the origin's pose, which must come no closer."""
+    if len(points) == 0:
+        return True, math.inf
+    reach = max(math.hypot(px, py) for px, py, _ in poses) + math.hypot(
+        max(abs(footprint.x_min), abs(footprint.x_max)), max(abs(footprint.y_min), abs(footprint.y_max)))
+    near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach + margin]
+    if len(near) == 0:
+        return True, math.inf
+    now = _point_clearances(near, footprint, [(0.0, 0.0, 0.0)])[0]
+    along = _point_clearances(near, footprint, poses).min(axis=0)
+    return bool(numpy.all(along >= numpy.minimum(now, margin) - CLEARANCE_EPS_M)), float(along.min())
 
 
 def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
@@ -171,9 +188,10 @@ def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
     full = None
     for scale in SCALES[:-1]:
         v, w = scale * v_cmd, scale * w_cmd
-        clearance = path_clearance(points, footprint, predicted_poses(v0, w0, v, w, settings))
+        safe, clearance = keeps_room(points, footprint, predicted_poses(v0, w0, v, w, settings),
+                                     settings.safety_margin)
         full = clearance if full is None else full
-        if is_safe(now, clearance, settings.safety_margin):
+        if safe:
             if scale == 1.0:
                 return GuardResult(v, w, GuardVerdict.PASS, 'clear: %.2f m or more on the predicted path'
                                    % min(clearance, 99.0), clearance)
