@@ -74,9 +74,11 @@ def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
         text, _ = process.communicate(timeout=SWEEP_TIMEOUT_S)
     finally:
         stop(process)
-    assert process.returncode == 0, text[-3000:]
     with open(str(out / 'rows.csv'), newline='') as f:
-        indices = sorted(int(r['index']) for r in csv.DictReader(f))
+        rows = list(csv.DictReader(f))
+    errors = ['%s: %s' % (r['index'], r['error']) for r in rows if r['outcome'] == 'error']
+    assert process.returncode == 0, '%s\nerror rows: %s' % (text[-3000:], errors)
+    indices = sorted(int(r['index']) for r in rows)
     assert indices == [0, 1, 2, 3], indices                 # each once
     assert any(name.endswith('.attempt-1') for name in os.listdir(str(out / 'graphs'))), os.listdir(str(out / 'graphs'))
     assert graph_leftovers(out) == {'processes': [], 'listening': []}
