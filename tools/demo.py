@@ -198,15 +198,11 @@ def main():
     log = open(log_path, 'w')
     launch = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        import rosgraph
         import rospy
-        deadline = time.monotonic() + MASTER_WAIT_S
-        while not rosgraph.is_master_online():
-            if launch.poll() is not None or time.monotonic() > deadline:
-                print('demo: roslaunch did not bring up a master; see %s' % log_path)
-                return 1
-            time.sleep(0.2)
-        rospy.init_node('demo_monitor', anonymous=True, disable_signals=True)
+        from closed_loop.nodes.common import join_launch
+        if not join_launch('demo_monitor', launch, MASTER_WAIT_S):
+            print('demo: roslaunch did not bring up a master; see %s' % log_path)
+            return 1
         outline_xy = None
         try:
             description = rospy.get_param('/robot_description', None)
@@ -218,6 +214,8 @@ def main():
                 outline_xy = footprint_outline(robot_model.footprint(description))
         except robot_model.RobotModelError as error:
             print('demo: no footprint for the clearance figure: %s' % error)
+        except OSError:
+            pass    # the master went with the launch, which the loop below reports
         mon = Monitor(args.controller, world, outline_xy)
         started = time.monotonic()
         next_status = started

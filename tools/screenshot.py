@@ -42,16 +42,13 @@ def main():
                                    'world:=' + args.world, 'rviz:=true'], stdout=log, stderr=subprocess.STDOUT,
                                   env=env, start_new_session=True)
         try:
-            import rosgraph
             import rospy
             from nav_msgs.msg import Odometry
+            from closed_loop.nodes.common import join_launch
             deadline = time.monotonic() + WAIT_LIMIT_S
-            while not rosgraph.is_master_online():
-                if time.monotonic() > deadline or launch.poll() is not None:
-                    print('screenshot: no master; see %s' % log_path)
-                    return 1
-                time.sleep(0.2)
-            rospy.init_node('screenshot', anonymous=True, disable_signals=True)
+            if not join_launch('screenshot', launch, WAIT_LIMIT_S):
+                print('screenshot: no master; see %s' % log_path)
+                return 1
             while True:
                 msg = rospy.wait_for_message('/base_pose_ground_truth', Odometry, timeout=WAIT_LIMIT_S)
                 p = msg.pose.pose.position

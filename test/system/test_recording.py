@@ -45,9 +45,14 @@ def test_a_folder_name_with_space_quotes_and_backticks_gets_the_bag(tmp_path):
 def run_demo(tmp_path, *launch_args, seconds=30):
     port = free_port()
     env = ros_env(tmp_path, port)
-    done = subprocess.run([sys.executable, os.path.join(ROOT, 'tools', 'demo.py'), '--seconds', str(seconds)]
-                          + list(launch_args), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                          timeout=seconds + 60)
+    try:
+        done = subprocess.run([sys.executable, os.path.join(ROOT, 'tools', 'demo.py'), '--seconds', str(seconds)]
+                              + list(launch_args), env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              timeout=seconds + 60)
+    except subprocess.TimeoutExpired as hung:
+        log = open(os.path.join(ROOT, 'test_output', 'demo.log'), errors='replace').read()
+        raise AssertionError('the demo hung; it printed:\n%s\nits launch log ends:\n%s'
+                             % ((hung.output or b'').decode(errors='replace'), log[-3000:])) from None
     return done.returncode, done.stdout.decode(errors='replace')
 
 

@@ -3,6 +3,8 @@ import math
 import os
 import sys
 import tempfile
+import threading
+import time
 
 import rospkg
 import rospy
@@ -46,6 +48,30 @@ def init_node(name, **kwargs):
                          % (name, log_dir, problem))
         sys.exit(1)
     rospy.init_node(name, **kwargs)
+
+
+def join_launch(name, launch, wait_s):
+    """Join, as an anonymous node without signal handlers, the graph that ``launch`` (the subprocess.Popen
+    of a roslaunch) brings up. True once joined; False if no master came within ``wait_s`` s or the launch
+    ended first.
+
+    rospy retries a registration with the master for as long as the node is up, so a subscription made
+    just as the launch ends would hang its caller forever; a watcher thread shuts this node down when the
+    launch ends, which ends those retries.
+    """
+    import rosgraph
+    deadline = time.monotonic() + wait_s
+    while not rosgraph.is_master_online():
+        if launch.poll() is not None or time.monotonic() > deadline:
+            return False
+        time.sleep(0.2)
+    init_node(name, anonymous=True, disable_signals=True)
+
+    def watch():
+        launch.wait()
+        rospy.signal_shutdown('the launch ended')
+    threading.Thread(target=watch, name='launch-watch', daemon=True).start()
+    return True
 
 
 def load_settings(cls, namespaces=('~',)):

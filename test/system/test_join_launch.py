@@ -1,0 +1,45 @@
+"""A tool that watches a launch (``make demo``, the screenshot) ends when the launch ends, even if the master
+goes while it subscribes: rospy alone retries that registration forever."""
+import subprocess
+import sys
+import textwrap
+
+from conftest import ROOT, free_port, ros_env
+
+# A child that joins a real master's graph, sees the master end, then subscribes.
+CHILD = textwrap.dedent('''
+    import signal, subprocess, sys
+    sys.path.insert(0, sys.argv[1] + '/src')
+    import rospy
+    from std_msgs.msg import String
+    from closed_loop.nodes.common import join_launch
+    launch = subprocess.Popen(['roscore', '-p', sys.argv[2]], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.STDOUT, start_new_session=True)
+    joined = join_launch('joiner', launch, 30.0)
+    launch.send_signal(signal.SIGINT)
+    launch.wait(30)
+    rospy.Subscriber('/anything', String, lambda m: None)
+    print('joined %s; subscribed after the launch ended; shut down: %s' % (joined, rospy.is_shutdown()))
+''')
+
+
+def test_a_subscription_made_after_the_launch_ended_returns(tmp_path):
+    port = free_port()
+    done = subprocess.run([sys.executable, '-c', CHILD, ROOT, str(port)], env=ros_env(tmp_path, port),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=90)
+    out = done.stdout.decode(errors='replace')
+    assert 'joined True; subscribed after the launch ended; shut down: True' in out, out
+
+
+def test_no_master_is_reported_not_waited_for_forever(tmp_path):
+    port = free_port()
+    code = textwrap.dedent('''
+        import subprocess, sys
+        sys.path.insert(0, sys.argv[1] + '/src')
+        from closed_loop.nodes.common import join_launch
+        launch = subprocess.Popen([sys.executable, '-c', 'pass'])
+        print('joined', join_launch('joiner', launch, 30.0))
+    ''')
+    done = subprocess.run([sys.executable, '-c', code, ROOT], env=ros_env(tmp_path, port),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
+    assert b'joined False' in done.stdout, done.stdout
