@@ -82,14 +82,16 @@ def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
     apart (the speed of each step is the one reached at its end: the pose runs slightly ahead)."""
     dt = step_s
     t = numpy.arange(1, steps + 1) * dt
-    follow = t <= horizon_s + 1e-9
+    follow = int(numpy.count_nonzero(t <= horizon_s + 1e-9))     # the steps within the horizon come first
+    during, then = t[:follow], t[follow:] - horizon_s
 
     def speeds(start, target, rate):
-        target = numpy.asarray(target, float)[:, None]
-        along = start + numpy.clip(target - start, -rate * t, rate * t)          # ramp toward the candidate
-        at_end = start + numpy.clip(target - start, -rate * horizon_s, rate * horizon_s)
-        after = numpy.sign(at_end) * numpy.maximum(numpy.abs(at_end) - rate * (t - horizon_s), 0.0)
-        return numpy.where(follow, along, after)
+        change = numpy.asarray(target, float)[:, None] - start
+        # Ramp toward the candidate, then from where the ramp is at the horizon to zero.
+        along = start + numpy.minimum(numpy.maximum(change, -rate * during), rate * during)
+        at_end = start + numpy.minimum(numpy.maximum(change, -rate * horizon_s), rate * horizon_s)
+        after = numpy.sign(at_end) * numpy.maximum(numpy.abs(at_end) - rate * then, 0.0)
+        return numpy.concatenate((along, after), axis=1)
     vs = speeds(v0, v, settings.accel)
     ws = speeds(w0, w, settings.yaw_accel)
     yaw = numpy.cumsum(ws * dt, axis=1)

@@ -36,6 +36,7 @@ FINE = 2
 BOX_MARGIN_M = 3.0
 MAX_BOX_M = 20.0
 START_SEARCH_M = 0.8
+GROWTH_CHECK = 4
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 _SQUARE = numpy.ones((3, 3), numpy.uint8)
 _NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
@@ -118,29 +119,28 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
         # The straight line is the way: the aim is on it, exactly (not at a cell's centre).
         scale = min(1.0, aim_m / max(math.hypot(*goal), 1e-9))
         return Way((goal[0] * scale, goal[1] * scale), tuple(goal), lambda: numpy.array([(0.0, 0.0), tuple(goal)]))
-    # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter; ``count`` adds one
-    # per round to every cell reached, so a cell reached in round m (the goal in round 0) ends with
-    # rounds + 1 - m, from which its step count is read back.
+    # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter, and ``count`` adds
+    # ``left`` once a round before the round's cells leave it, so a cell reached in round m (the goal in round
+    # 0) ends with m. Whether it still grows is asked every GROWTH_CHECK rounds only (a wave that stopped
+    # spends at most that many empty rounds).
     left = passable.astype(numpy.uint8)
     left[goal_cell] = 0
-    seen = numpy.zeros((rows, cols), numpy.uint8)
-    seen[goal_cell] = 1
-    count = seen.copy()
-    front = seen.copy()
+    front = numpy.zeros((rows, cols), numpy.uint8)
+    front[goal_cell] = 1
+    count = numpy.zeros((rows, cols), numpy.uint8)
     k = 0
-    while not seen[start]:
+    while left[start]:
         k += 1
         if k >= 254:
             return None
         grown = cv2.dilate(front, _SQUARE if k % 2 else _CROSS)
         cv2.bitwise_and(grown, left, dst=grown)
-        if not cv2.countNonZero(grown):
+        if k % GROWTH_CHECK == 0 and not cv2.countNonZero(grown):
             return None
+        cv2.add(count, left, dst=count)
         cv2.subtract(left, grown, dst=left)
-        cv2.bitwise_or(seen, grown, dst=seen)
-        cv2.add(count, seen, dst=count)
         front = grown
-    steps = numpy.where(seen > 0, k + 1 - count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
+    steps = numpy.where(passable & (left == 0), count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
     # Down the wave from the start, aim_m of path. The aim is the farthest point of the way in sight of the
     # start through passable cells: steering for a point beyond a bend would cut the corner into what the
     # way goes round.
