@@ -148,6 +148,11 @@ class Footprint:
     def width_m(self):
         return self.y_max - self.y_min
 
+    @property
+    def radius_m(self):
+        """How far the rectangle reaches from base_footprint's origin (m): its farthest corner."""
+        return math.hypot(max(abs(self.x_min), abs(self.x_max)), max(abs(self.y_min), abs(self.y_max)))
+
 
 def _origin_matrix(element):
     """The 4x4 transform of a URDF ``<origin xyz rpy>`` (identity when absent)."""

@@ -331,3 +331,24 @@ def test_the_chamfer_transform_never_overstates_by_more_than_its_allowance():
         chamfer = cv2.distanceTransform(img, cv2.DIST_L2, cv2.DIST_MASK_5)
         exact = cv2.distanceTransform(img, cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
         assert (chamfer * (1.0 - CHAMFER_ERROR) <= exact + 1e-6).all()
+
+
+def test_danger_is_a_path_within_the_margin_of_any_scan_point():
+    # in_danger looks only at points near the swept footprint; it must agree with the whole scan's clearance.
+    from closed_loop.control.guard import path_clearance
+    from closed_loop.control.local_planner import PREDICTION_STEP_S
+    from closed_loop.control.navigator import in_danger
+    s = NavigatorSettings()
+    rng = numpy.random.default_rng(11)
+    seen = set()
+    for _ in range(300):
+        points = rng.uniform(-2.5, 2.5, (int(rng.integers(1, 200)), 2))
+        v, w = float(rng.uniform(-0.3, 0.8)), float(rng.uniform(-1.5, 1.5))
+        steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
+        poses = predict(v, w, [v], [w], s, s.horizon, steps)[0]
+        expected = path_clearance(points, JACKAL, poses) < s.safety_margin
+        assert in_danger((v, w), points, s, JACKAL) == expected
+        seen.add(expected)
+    assert seen == {True, False}
+    assert not in_danger((0.0, 0.0), numpy.zeros((1, 2)), s, JACKAL)
+    assert not in_danger((0.5, 0.0), numpy.zeros((0, 2)), s, JACKAL)

@@ -13,6 +13,7 @@ from closed_loop.control.scan import Scan
 from closed_loop.control.scan_memory import CELL_M, ScanMemory
 from closed_loop.controllers import Context, Odom
 from closed_loop.controllers.avoid_obstacles import MAP_PERIOD_S, AvoidObstacles
+from closed_loop.controllers.fusion_controller import FusionController
 from closed_loop.geometry import Pose2D
 from closed_loop.robot_model import Footprint
 
@@ -124,3 +125,16 @@ def test_the_plan_as_a_ros_path_and_the_map_as_markers():
     markers = to_message(AvoidObstacles.map_drawing(remembered), frames, stamp)
     assert isinstance(markers, MarkerArray) and markers.markers[0].action == markers.markers[0].DELETEALL
     assert numpy.allclose([(p.x, p.y) for p in markers.markers[1].points], [(0.05, 0.05), (0.15, 0.15)])
+
+
+def test_the_fusion_controller_shows_the_same_plan_and_map():
+    core = FusionController(NavigatorSettings(), Context(LASER, JACKAL, (5.0, 1.0)))
+    for k in range(3):
+        now = 0.1 * k
+        odom = Odom(1.0, 1.0, 0.0, 0.0, 0.0, now)
+        core.on_scan(now, wall_scan(stamp_s=now), odom)
+        core.on_tick(now, odom)
+    drawn = core.drawings({'window', 'plan', 'map'})
+    assert isinstance(drawn['plan'], Route) and tuple(drawn['plan'].points[-1]) == pytest.approx((5.0, 1.0))
+    cells = numpy.array(drawn['map'].shapes[0].points)
+    assert numpy.abs(cells[:, 0] - 2.5).max() <= CELL_M

@@ -126,7 +126,7 @@ def keeps_margin(points, footprint, poses, margin):
     the exact check, over the points the swept rectangle could come that near to."""
     if not len(points):
         return True
-    radius = math.hypot(max(-footprint.x_min, footprint.x_max), max(-footprint.y_min, footprint.y_max))
+    radius = footprint.radius_m
     reach = float(numpy.hypot(poses[:, 0], poses[:, 1]).max()) + radius + margin
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach]
     return not len(near) or float(footprint_clearances(near, footprint, poses).min()) >= margin

@@ -78,6 +78,12 @@ class FusionNavigator:
     def reconfigure(self, settings):
         self.navigator.reconfigure(settings)
 
+    def scanned(self, scan, laser_pose):
+        return self.navigator.scanned(scan, laser_pose)
+
+    def remembered(self):
+        return self.navigator.remembered()
+
     def on_detection(self, u, stamp_s, pose):
         """A camera frame's red detection: its pixel column (None: no red in it), stamp and the robot's pose."""
         self._detection = (u, stamp_s, pose)

@@ -155,8 +155,7 @@ def path_clearance(points, footprint, poses):
     if len(points) == 0:
         return math.inf
     # Only points the swept footprint can come near matter.
-    reach = max(math.hypot(px, py) for px, py, _ in poses) + math.hypot(
-        max(abs(footprint.x_min), abs(footprint.x_max)), max(abs(footprint.y_min), abs(footprint.y_max)))
+    reach = max(math.hypot(px, py) for px, py, _ in poses) + footprint.radius_m
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach + 1.0]
     return float(numpy.min(footprint_clearances(near, footprint, poses)))
 
@@ -166,8 +165,7 @@ def keeps_room(points, footprint, poses, margin):
     along ``poses``, except one already closer at the origin's pose, which must come no closer."""
     if len(points) == 0:
         return True, math.inf
-    reach = max(math.hypot(px, py) for px, py, _ in poses) + math.hypot(
-        max(abs(footprint.x_min), abs(footprint.x_max)), max(abs(footprint.y_min), abs(footprint.y_max)))
+    reach = max(math.hypot(px, py) for px, py, _ in poses) + footprint.radius_m
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach + margin]
     if len(near) == 0:
         return True, math.inf

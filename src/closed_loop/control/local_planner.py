@@ -178,8 +178,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     # Followed for the horizon, then both speeds brake at once: at rest after the longer of the two.
     safe_steps = int(math.ceil((s.horizon + max(top_v / s.accel, top_w / s.yaw_accel)) / PREDICTION_STEP_S)) + 1
     long_steps = int(math.ceil(s.lookahead / PREFERENCE_STEP_S))
-    radius = math.hypot(max(abs(footprint.x_min), abs(footprint.x_max)),
-                        max(abs(footprint.y_min), abs(footprint.y_max)))
+    radius = footprint.radius_m
     longest_s = max(safe_steps * PREDICTION_STEP_S, long_steps * PREFERENCE_STEP_S)
     reach = top_v * longest_s + radius + CLEARANCE_CAP_M
     near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach] if len(points) else points

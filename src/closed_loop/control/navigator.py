@@ -12,7 +12,7 @@ import math
 
 import numpy
 
-from closed_loop.control.guard import footprint_clearance, path_clearance, scan_points
+from closed_loop.control.guard import footprint_clearance, footprint_clearances, path_clearance, scan_points
 from closed_loop.control.local_planner import PREDICTION_STEP_S, check_finite, plan, predict, step_toward
 from closed_loop.control.scan import sample_angles
 from closed_loop.control.scan_memory import ScanMemory
@@ -91,12 +91,16 @@ def in_danger(sent, scan_points_xy, settings, footprint):
     comes within ``safety_margin`` of the scan's points (robot frame). The node acts at once on such a
     scan rather than at its next tick."""
     v, w = sent
-    if v == 0.0 and w == 0.0:
+    if v == 0.0 and w == 0.0 or not len(scan_points_xy):
         return False
     s = settings
     steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
-    poses = predict(v, w, [v], [w], s, s.horizon, steps)
-    return path_clearance(scan_points_xy, footprint, poses[0]) < s.safety_margin
+    poses = predict(v, w, [v], [w], s, s.horizon, steps)[0]
+    # Only a point within the margin of the swept footprint counts: none farther from the robot than the
+    # farthest pose, the footprint's corner and the margin.
+    reach = float(numpy.hypot(poses[:, 0], poses[:, 1]).max()) + footprint.radius_m + s.safety_margin
+    near = scan_points_xy[numpy.hypot(scan_points_xy[:, 0], scan_points_xy[:, 1]) <= reach]
+    return bool(len(near)) and float(footprint_clearances(near, footprint, poses).min()) < s.safety_margin
 
 
 class NavState(enum.Enum):
@@ -170,6 +174,7 @@ class Navigator:
         self._command = None         # the command of the last step, (m/s, rad/s)
         self._remembered_scan = None
         self._scanned = None         # its points in the robot's frame
+        self._points_of = None       # (scan, laser pose, its points): the last scan turned into points
         self.set_goal(goal_xy)
 
     def set_goal(self, goal_xy, now_s=None):
@@ -205,6 +210,13 @@ class Navigator:
         dx, dy = gx - x, gy - y
         c, s = math.cos(yaw), math.sin(yaw)
         return (c * dx + s * dy, -s * dx + c * dy), progress
+
+    def scanned(self, scan, laser_pose):
+        """The scan's points in the robot's frame (``guard.scan_points``), worked out once a scan: the node
+        asks on the scan's arrival (is the command being followed still safe?), the decision after it."""
+        if self._points_of is None or self._points_of[0] is not scan or self._points_of[1] != laser_pose:
+            self._points_of = (scan, laser_pose, scan_points(scan, laser_pose))
+        return self._points_of[2]
 
     def remembered(self):
         """What it remembers of the scans, as :meth:`closed_loop.control.scan_memory.ScanMemory.occupancy` gives
@@ -258,7 +270,7 @@ class Navigator:
             if step is not None:
                 return step
         if scan is not self._remembered_scan:
-            self._remembered_scan, self._scanned = scan, scan_points(scan, laser_pose)
+            self._remembered_scan, self._scanned = scan, self.scanned(scan, laser_pose)
             self._memory.add(now_s, pose, self._scanned, scan, laser_pose)
         if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
             step = self._final_approach(now_s, goal_local, v0, w0, scan, laser_pose, footprint)

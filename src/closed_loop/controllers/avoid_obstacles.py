@@ -113,7 +113,9 @@ class AvoidObstacles(Controller):
                 self.log.error('scan rejected: %s' % error)
                 scan = None
         self.scan = scan
-        if scan is None or in_danger(self.sent, scan_points(scan, self.context.laser_pose), self.settings,
+        laser_pose = self.context.laser_pose
+        if scan is None or in_danger(self.sent, scan_points(scan, laser_pose) if self.navigator is None
+                                     else self.navigator.scanned(scan, laser_pose), self.settings,
                                      self.context.footprint):
             return self.on_tick(now_s, odom)
         return None

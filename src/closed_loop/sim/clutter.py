@@ -93,7 +93,7 @@ def narrowest_gap(world):
 def robot_extent(profile):
     """(width m, circumscribed radius m) of a profile's footprint rectangle, about base_footprint."""
     fp = profile.footprint
-    return fp.y_max - fp.y_min, math.hypot(max(-fp.x_min, fp.x_max), max(-fp.y_min, fp.y_max))
+    return fp.y_max - fp.y_min, fp.radius_m
 
 
 def generate(settings, profile=None):

@@ -209,7 +209,7 @@ class Robot:
         # max_m of the circle round this robot's), nearest such circle first, until the next circle is
         # farther than the least distance found; and every other robot.
         fp = self.model.footprint
-        radius = math.hypot(max(-fp.x_min, fp.x_max), max(-fp.y_min, fp.y_max))
+        radius = fp.radius_m
         x, y = self._call(pybullet.getBasePositionAndOrientation, self.robot_id)[0][:2]
         least = float('inf')
         for uid in self.sim.other_robot_ids(self):
