@@ -27,8 +27,8 @@ Beside the score, how many of the fill's worlds have a way for the footprint wit
 keeps round it (``safety_margin`` + ``local_planner.AIM_ROOM_M`` each side, ``barn.has_way``): how tight the
 worlds are for this navigator (a guide, not a bound: the lattice turns by 45 degrees, the robot by any angle).
 
-Targets: success at least 90 %, zero contacts in every run, decision p99 under 5 ms. Figures, not pass/fail:
-the exit status is non-zero only when an episode could not run.
+Targets: success at least 90 %, zero contacts in every run, decision p99 under 5 ms (under 3 ms in the BARN-method
+set). Figures, not pass/fail: the exit status is non-zero only when an episode could not run.
 """
 import argparse
 import collections
@@ -54,6 +54,8 @@ BARN_SEED_TRIES = 50
 TIME_LIMIT_S = 80.0
 TARGET_SUCCESS = 0.90
 TARGET_DECISION_P99_MS = 5.0
+#: The decision's p99 in BARN-class clutter (720 rays).
+TARGET_CLUTTER_P99_MS = 3.0
 #: The decisions of about this many runs, spread over the set, are kept to be replayed (a run's scans are about
 #: 2 MB).
 REPLAY_RUNS = 60
@@ -215,9 +217,10 @@ def run_set(method, args):
              ', score %.3f (the benchmark\'s; optimal times at %.1f m/s); %d/%d worlds have a way for the footprint '
              'with the room the window keeps (%.2f m)' % (numpy.mean(scores), top_speed, roomy_total, total, room_m)
              if barn_set else ''))
-    print('decision cost over %d decisions (target p99 under %.0f ms): p50 %.2f ms, p99 %.2f ms replayed alone '
+    print('decision cost over %d decisions (target p99 under %.0f ms%s): p50 %.2f ms, p99 %.2f ms replayed alone '
           '(as the node, in its own process); p50 %.2f ms, p99 %.2f ms in the episode loop, between physics steps'
-          % (len(alone), TARGET_DECISION_P99_MS, a50, a99, p50, p99))
+          % (len(alone), TARGET_DECISION_P99_MS, ', under %.0f ms in this clutter' % TARGET_CLUTTER_P99_MS
+             if barn_set else '', a50, a99, p50, p99))
 
 
 if __name__ == '__main__':
