@@ -22,6 +22,7 @@ footprint's outline (``closed_loop.control.clearance_field``), so a decision cos
 of ROS.
 """
 import dataclasses
+import functools
 import math
 
 import numpy
@@ -99,6 +100,19 @@ def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
     x = numpy.cumsum(vs * numpy.cos(mid) * dt, axis=1)
     y = numpy.cumsum(vs * numpy.sin(mid) * dt, axis=1)
     return numpy.stack((x, y, yaw), axis=2).astype(numpy.float32)
+
+
+@functools.lru_cache(maxsize=8)
+def candidate_speeds(max_speed, max_yaw_rate):
+    """The window's candidates, (v, w) each (C,): LINEAR_SAMPLES speeds from 0 to ``max_speed`` by
+    ANGULAR_SAMPLES turn rates over +-``max_yaw_rate``, closer together near zero (u|u| over -1..1), where a
+    small heading error is corrected. Made once for given limits (read-only arrays)."""
+    vs = numpy.linspace(0.0, max_speed, LINEAR_SAMPLES)
+    u = numpy.linspace(-1.0, 1.0, ANGULAR_SAMPLES)
+    ws = max_yaw_rate * u * numpy.abs(u)
+    v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
+    v.flags.writeable = w.flags.writeable = False
+    return v, w
 
 
 def check_finite(name, *values):
@@ -188,11 +202,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
 
     # Candidates are targets over the whole speed range; each is predicted with the ramp from (v0, w0) at
     # the accelerations, and what is sent is the first period's step of that ramp (the dynamic window).
-    vs = numpy.linspace(0.0, s.max_speed, LINEAR_SAMPLES)
-    # Turn rates closer together near zero (u|u| over -1..1), where a small heading error is corrected.
-    u = numpy.linspace(-1.0, 1.0, ANGULAR_SAMPLES)
-    ws = s.max_yaw_rate * u * numpy.abs(u)
-    v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
+    v, w = candidate_speeds(s.max_speed, s.max_yaw_rate)
     safe_poses = predict(v0, w0, v, w, s, s.horizon, safe_steps)
     clear = clearances(field, shape, safe_poses, OUTLINE_STEP_M).min(axis=1)
     safe = clear >= s.safety_margin

@@ -124,6 +124,12 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
     # 0) ends with m. Whether it still grows is asked every GROWTH_CHECK rounds only (a wave that stopped
     # spends at most that many empty rounds).
     left = passable.astype(numpy.uint8)
+    # The wave steps to 4- or 8-neighbours only: where no 8-connected chain of passable cells joins the goal to
+    # the start, it cannot reach the start, which one call finds out (in clutter, where no way is seen, this
+    # saves the whole wave; the answer, no way, is the same).
+    labels = cv2.connectedComponents(left, connectivity=8, ltype=cv2.CV_16U)[1]
+    if labels[start] != labels[goal_cell]:
+        return None
     left[goal_cell] = 0
     front = numpy.zeros((rows, cols), numpy.uint8)
     front[goal_cell] = 1
