@@ -122,6 +122,22 @@ def test_prediction_ramps_then_brakes_to_rest():
     assert step[-1] == 0.0                                   # at rest in the end
 
 
+
+def test_turn_rates_ramp_at_their_own_rate_and_a_batch_predicts_each_candidate_alone():
+    s = NavigatorSettings()
+    poses = predict(0.0, 0.0, numpy.array([0.0]), numpy.array([1.5]), s, s.horizon, 20)[0]
+    turn = numpy.diff(numpy.concatenate(([0.0], poses[:, 2])))
+    assert turn[0] == pytest.approx(0.1 * 0.3, abs=1e-6)      # 0.1 s at 0.3 rad/s (3 rad/s^2 ramp)
+    assert turn.max() == pytest.approx(0.15, abs=1e-6)         # 1.5 rad/s, reached at the horizon
+    assert turn[-1] == 0.0 and numpy.abs(poses[:, :2]).max() == 0.0
+    rng = numpy.random.default_rng(5)
+    v, w = rng.uniform(-0.5, 0.5, 9), rng.uniform(-1.5, 1.5, 9)
+    batch = predict(0.2, -0.4, v, w, s, s.horizon, 12)
+    assert batch.shape == (9, 12, 3) and batch.dtype == numpy.float32 and batch.flags.c_contiguous
+    for i in range(9):
+        assert numpy.array_equal(batch[i], predict(0.2, -0.4, [v[i]], [w[i]], s, s.horizon, 12)[0])
+
+
 def test_bad_input_is_refused():
     with pytest.raises(NavigatorError, match='goal_xy'):
         run(scan_of(), goal=(math.nan, 0.0))
