@@ -104,7 +104,7 @@ class PlanarRays:
             along = shape.ray_pairs(prepared, local, fx[rays], fy[rays])
             if drift:
                 along = along / level[rays]
-                if (gap[mine] + drift > self._half_height[mine]).any():     # some ray may pass over or under one
+                if (gap[near] + drift > self._half_height[near]).any():     # some ray may pass over or under one
                     with numpy.errstate(invalid='ignore'):                  # inf x 0 on a level ray that misses
                         height = z + along * rise[rays] - at[mine, 2]
                     along[numpy.abs(height) > self._half_height[mine]] = numpy.inf
@@ -144,7 +144,8 @@ def _fan_pairs(fan, count, near, rel_x, rel_y, distance, radius, stray=0.0):
     # Ray indices: from ceil((centre - half) / increment), to floor((centre + half) / increment) inclusive.
     bounds = numpy.floor(numpy.stack((half - centre, centre + half)) / increment)
     # -start within [-count, 0], end - 1 within [-1, count - 1]
-    numpy.clip(bounds, ((-count,), (-1,)), ((0,), (count - 1,)), out=bounds)
+    numpy.maximum(bounds, ((-count,), (-1,)), out=bounds)
+    numpy.minimum(bounds, ((0,), (count - 1,)), out=bounds)
     edges = bounds.astype(numpy.intp)
     return _expand(-edges[0], edges[1] + 1, numpy.repeat(near, 3))
 
