@@ -228,10 +228,12 @@ def _shape_corners(geometry):
     return None
 
 
+@functools.lru_cache(maxsize=32)
 def footprint(urdf_text, source='robot_description', base_frame=BASE_FRAME):
     """The :class:`Footprint` around every ``<collision>`` box, cylinder and sphere of the robot.
 
-    Meshes have no size here and are refused; a robot with no collision shape is refused too.
+    Meshes have no size here and are refused; a robot with no collision shape is refused too. Worked out once
+    per description (an episode asks for it at every start).
     """
     robot, poses = link_transforms(urdf_text, base_frame, source)
     points = []
@@ -253,8 +255,9 @@ def footprint(urdf_text, source='robot_description', base_frame=BASE_FRAME):
     return Footprint(float(xy[:, 0].min()), float(xy[:, 0].max()), float(xy[:, 1].min()), float(xy[:, 1].max()))
 
 
+@functools.lru_cache(maxsize=64)
 def frame_pose_2d(urdf_text, frame, source='robot_description', base_frame=BASE_FRAME):
-    """The planar pose (x, y, yaw) of ``frame`` in the base frame."""
+    """The planar pose (x, y, yaw) of ``frame`` in the base frame (worked out once per description and frame)."""
     _robot, poses = link_transforms(urdf_text, base_frame, source)
     if frame not in poses:
         raise RobotModelError('%s: link %r is missing or not below %r' % (source, frame, base_frame))
