@@ -15,8 +15,6 @@ from closed_loop.sim.sensors.lidar import LidarSettings, scan_layout
 from closed_loop.sim.simulation import SimSettings
 from conftest import SimWithSensors
 from closed_loop.sim.obstacles import moving_obstacle_xy
-from closed_loop.sim.profiles import load_profile
-from closed_loop.geometry import quaternion_yaw
 from closed_loop.sim.world import load_world, parse_world
 
 WORLDS_DIR = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'worlds'))
@@ -554,23 +552,3 @@ def test_clearance_follows_a_moving_obstacle(make_sim):
         values.append(sim.clearance(5.0))
         assert values[-1] == brute_force_clearance(sim, 5.0)
     assert len(set(values)) > 1
-
-
-@pytest.mark.parametrize('robot', ['burger', 'jackal'])
-def test_a_robot_whose_odometry_heading_is_the_gyros_keeps_it_through_turns(robot):
-    """The Burger's firmware and the Jackal's EKF take odometry's heading from the IMU: after arcs and turns in
-    place its yaw is ground truth's, however the wheels slipped."""
-    profile = load_profile(robot)
-    assert profile.node_params('sim')['odom_yaw_rate'] == 'gyro'
-    rig = Rig(world('empty'), dict(profile.node_params('sim'), camera=False), profile.urdf)
-    try:
-        sim = rig.sim
-        start = sim.robots[0].start
-        for twist in (VelocityCommand(0.0, 1.5), VelocityCommand(0.2, -1.0), VelocityCommand(0.0, -2.0)):
-            run(sim, 2.0, twist)
-        run(sim, 1.0)
-        turned = quaternion_yaw(sim.ground_truth()[0].orientation) - start.yaw
-        error = math.atan2(math.sin(sim.odometry.yaw - turned), math.cos(sim.odometry.yaw - turned))
-        assert abs(error) < math.radians(0.2)
-    finally:
-        rig.close()
