@@ -6,6 +6,7 @@ import socket
 import subprocess
 import sys
 import time
+import xmlrpc.client
 
 import pytest
 
@@ -35,6 +36,28 @@ def master_up(port):
     with socket.socket() as s:
         s.settimeout(0.2)
         return s.connect_ex(('127.0.0.1', port)) == 0
+
+
+class _PatientTransport(xmlrpc.client.Transport):
+    """XML-RPC over HTTP that gives up after a couple of seconds (what listens may not speak HTTP at all)."""
+
+    def make_connection(self, host):
+        connection = super().make_connection(host)
+        connection.timeout = 2.0
+        return connection
+
+
+def master_answers(port):
+    """True if a ROS master answers on ``port``: not just anything listening there, since once a graph has
+    let its port go, another test's node may take the same number for its own server."""
+    if not master_up(port):
+        return False
+    try:
+        code, _, _ = xmlrpc.client.ServerProxy('http://127.0.0.1:%d' % port, transport=_PatientTransport()) \
+            .getSystemState('/leftover_check')
+    except Exception:   # not XML-RPC, or a node's API (it has no getSystemState), or gone meanwhile
+        return False
+    return code == 1
 
 
 def wait_master(port, process=None, timeout_s=MASTER_WAIT_S):
@@ -134,11 +157,11 @@ def fixture_workspace(tmp_path):
 
 def graph_leftovers(root):
     """What is left of the graph episodes whose folders are under ``root``: the processes that carry their
-    mark (running ones: a zombie has no environment left) and the masters still listening on their ports."""
+    mark (running ones: a zombie has no environment left) and the masters still answering on their ports."""
     import glob
     from closed_loop.batch import graph_keeper
     ports = [int(open(path).read()) for path in glob.glob(os.path.join(str(root), '**', 'port'), recursive=True)]
-    return {'processes': graph_keeper.marked_processes(str(root)), 'listening': [p for p in ports if master_up(p)]}
+    return {'processes': graph_keeper.marked_processes(str(root)), 'listening': [p for p in ports if master_answers(p)]}
 
 
 def run_sweep(env, sweep_path, output, *extra, timeout_s=600):
