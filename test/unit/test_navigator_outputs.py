@@ -99,7 +99,7 @@ def test_the_plan_is_the_way_in_odom_from_where_the_robot_is_and_the_map_comes_o
     assert points[numpy.argmin(numpy.abs(points[:, 0] - 2.5)), 1] > 1.6
     # The map is in odom, where the wall is (x = 2.5 m from y = -1 to 1.6).
     drawing = sent['map'][-1][1]
-    assert isinstance(drawing, Drawing) and drawing.frame == 'odom' and drawing.clear
+    assert isinstance(drawing, Drawing) and drawing.frame == 'odom' and not drawing.clear
     cells = numpy.array(drawing.shapes[0].points)
     assert numpy.abs(cells[:, 0] - 2.5).max() <= CELL_M
     assert cells[:, 1].min() == pytest.approx(-1.0, abs=CELL_M) and cells[:, 1].max() == pytest.approx(1.6, abs=CELL_M)
@@ -123,8 +123,12 @@ def test_the_plan_as_a_ros_path_and_the_map_as_markers():
     assert all(p.header.frame_id == 'odom' for p in msg.poses)
     remembered = ((0.0, 0.0), numpy.array([[True, False], [False, True]]))
     markers = to_message(AvoidObstacles.map_drawing(remembered), frames, stamp)
-    assert isinstance(markers, MarkerArray) and markers.markers[0].action == markers.markers[0].DELETEALL
-    assert numpy.allclose([(p.x, p.y) for p in markers.markers[1].points], [(0.05, 0.05), (0.15, 0.15)])
+    # One marker that replaces the last map in place: no delete-all that rviz could carry out before it.
+    assert isinstance(markers, MarkerArray) and [m.action for m in markers.markers] == [markers.markers[0].ADD]
+    assert numpy.allclose([(p.x, p.y) for p in markers.markers[0].points], [(0.05, 0.05), (0.15, 0.15)])
+    # Nothing remembered: the last map is cleared.
+    empty = to_message(AvoidObstacles.map_drawing(((0.0, 0.0), numpy.zeros((1, 1), bool))), frames, stamp)
+    assert [m.action for m in empty.markers] == [empty.markers[0].DELETEALL]
 
 
 def test_the_fusion_controller_shows_the_same_plan_and_map():

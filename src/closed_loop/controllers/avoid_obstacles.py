@@ -177,13 +177,16 @@ class AvoidObstacles(Controller):
 
     @staticmethod
     def map_drawing(remembered):
-        """What the navigator remembers, in odom: a square on each cell where it holds a scan point."""
+        """What the navigator remembers, in odom: a square on each cell where it holds a scan point. One marker,
+        which each new map replaces in place (no delete-all before it: rviz may carry out a delete-all while the
+        new marker still waits for its transform, and show no map in between); an empty map clears it."""
         (x0, y0), occupied = remembered
         rows, cols = numpy.nonzero(occupied)
         cells = tuple((float(x0 + (j + 0.5) * CELL_M), float(y0 + (i + 0.5) * CELL_M), DRAW_Z_M)
                       for i, j in zip(rows, cols))
-        return Drawing('odom', (Shape('points', 'remembered', 0, MAP_COLOUR, (CELL_M, CELL_M, 0.0), cells),),
-                       clear=True)
+        if not cells:
+            return Drawing('odom', (), clear=True)
+        return Drawing('odom', (Shape('points', 'remembered', 0, MAP_COLOUR, (CELL_M, CELL_M, 0.0), cells),))
 
     @staticmethod
     def route(plan, pose):
