@@ -33,11 +33,12 @@ class ScanMemory:
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         keep = self.t >= now_s - self.memory_s
-        old, old_t = self.xy[keep], self.t[keep]
+        old, old_t = (self.xy, self.t) if keep.all() else (self.xy[keep], self.t[keep])
         if len(old) and scan.angle_increment > 0:
             # The remembered points in the laser's frame: along which ray, how far.
-            bx = c * (old[:, 0] - x) + s * (old[:, 1] - y) - laser_pose.x
-            by = -s * (old[:, 0] - x) + c * (old[:, 1] - y) - laser_pose.y
+            dx, dy = old[:, 0] - x, old[:, 1] - y
+            bx = c * dx + s * dy - laser_pose.x
+            by = -s * dx + c * dy - laser_pose.y
             bearing = numpy.arctan2(by, bx) - laser_pose.yaw
             count = len(scan.ranges)
             index = numpy.round(numpy.mod(bearing - scan.angle_min, 2 * math.pi)
@@ -45,18 +46,25 @@ class ScanMemory:
             if count * scan.angle_increment >= 2 * math.pi - 1e-6:
                 index %= count       # a full turn: the last ray's neighbour is the first
             inside = index < count
-            ranges = numpy.where(inside, scan.ranges[numpy.clip(index, 0, len(scan.ranges) - 1)], numpy.nan)
-            ranges = numpy.where(numpy.isposinf(ranges), scan.range_max, ranges)
+            ranges = numpy.where(inside, scan.ranges[numpy.minimum(index, count - 1)], numpy.nan)
+            ranges[ranges == numpy.inf] = scan.range_max
             with numpy.errstate(invalid='ignore'):
-                seen_through = numpy.hypot(bx, by) < ranges - SEE_THROUGH_M
-            old, old_t = old[~seen_through], old_t[~seen_through]
+                kept = ~(numpy.hypot(bx, by) < ranges - SEE_THROUGH_M)      # not seen through
+            old, old_t = old[kept], old_t[kept]
         new = numpy.column_stack((x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]))
         xy = numpy.concatenate((new, old))
         t = numpy.concatenate((numpy.full(len(new), now_s), old_t))
-        # One point per cell, the newest (the new points come first, and unique keeps the first of each).
+        # One point per cell, the newest: the new points come first, and a stable sort of the cells keeps the
+        # first of each (as numpy.unique's first indices would, without its wrapping).
         cells = numpy.floor(xy / CELL_M).astype(numpy.int64)
-        _, first = numpy.unique(cells[:, 0] * 1000003 + cells[:, 1], return_index=True)
-        self.xy, self.t = xy[first], t[first]
+        key = cells[:, 0] * 1000003 + cells[:, 1]
+        order = numpy.argsort(key, kind='stable')
+        sorted_key = key[order]
+        first = numpy.empty(len(order), bool)
+        first[:1] = True
+        numpy.not_equal(sorted_key[1:], sorted_key[:-1], out=first[1:])
+        chosen = order[first]
+        self.xy, self.t = xy[chosen], t[chosen]
 
     def points(self, pose):
         """The remembered points in the robot's frame at ``pose`` (x, y, yaw in odom), (M, 2)."""
