@@ -113,23 +113,22 @@ def test_no_chosen_path_comes_within_the_margin():
                 assert numpy.hypot(px - cx, py - cy).min() - r >= 0.1 - 0.01
 
 
-def test_prediction_ramps_then_brakes_to_rest():
+@pytest.mark.parametrize('v, w, axis, first, top, other', [
+    (0.5, 0.0, 0, 0.1 * 0.1, 0.05, 2),     # 0.1 s at 0.1 m/s (1 m/s^2 ramp); 0.5 m/s reached at the horizon
+    (0.0, 1.5, 2, 0.1 * 0.3, 0.15, 0),     # 0.1 s at 0.3 rad/s (3 rad/s^2 ramp); 1.5 rad/s at the horizon
+])
+def test_prediction_ramps_each_speed_at_its_own_rate_then_brakes_to_rest(v, w, axis, first, top, other):
     s = NavigatorSettings()
-    poses = predict(0.0, 0.0, numpy.array([0.5]), numpy.array([0.0]), s, s.horizon, 40)[0]
-    step = numpy.diff(numpy.concatenate(([0.0], poses[:, 0])))
-    assert step[0] == pytest.approx(0.1 * 0.1, abs=1e-6)     # 0.1 s at 0.1 m/s (1 m/s^2 ramp)
-    assert step.max() == pytest.approx(0.05, abs=1e-6)        # 0.5 m/s, reached at the horizon
+    poses = predict(0.0, 0.0, numpy.array([v]), numpy.array([w]), s, s.horizon, 40)[0]
+    step = numpy.diff(numpy.concatenate(([0.0], poses[:, axis])))
+    assert step[0] == pytest.approx(first, abs=1e-6)
+    assert step.max() == pytest.approx(top, abs=1e-6)
     assert step[-1] == 0.0                                   # at rest in the end
+    assert numpy.abs(poses[:, other]).max() == 0.0           # a straight line does not turn, nor a turn move
 
 
-
-def test_turn_rates_ramp_at_their_own_rate_and_a_batch_predicts_each_candidate_alone():
+def test_a_batch_predicts_each_candidate_as_alone():
     s = NavigatorSettings()
-    poses = predict(0.0, 0.0, numpy.array([0.0]), numpy.array([1.5]), s, s.horizon, 20)[0]
-    turn = numpy.diff(numpy.concatenate(([0.0], poses[:, 2])))
-    assert turn[0] == pytest.approx(0.1 * 0.3, abs=1e-6)      # 0.1 s at 0.3 rad/s (3 rad/s^2 ramp)
-    assert turn.max() == pytest.approx(0.15, abs=1e-6)         # 1.5 rad/s, reached at the horizon
-    assert turn[-1] == 0.0 and numpy.abs(poses[:, :2]).max() == 0.0
     rng = numpy.random.default_rng(5)
     v, w = rng.uniform(-0.5, 0.5, 9), rng.uniform(-1.5, 1.5, 9)
     batch = predict(0.2, -0.4, v, w, s, s.horizon, 12)
