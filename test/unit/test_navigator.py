@@ -6,10 +6,10 @@ import cv2
 import numpy
 import pytest
 
-from closed_loop.control import wavefront
+from closed_loop.control import navigator as navigator_module, wavefront
 from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, outline
 from closed_loop.control.guard import scan_points
-from closed_loop.control.local_planner import NavigatorError, plan, predict
+from closed_loop.control.local_planner import PREDICTION_STEP_S, NavigatorError, plan, predict, required_margin
 from closed_loop.control.navigator import NavigatorSettings
 from closed_loop.geometry import Pose2D
 from closed_loop.robot_model import Footprint
@@ -85,7 +85,7 @@ def test_a_gap_wide_enough_is_taken():
 def test_boxed_in_gives_zero():
     box = [((0.3, -0.25), (0.3, 0.25)), ((-0.25, -0.25), (-0.25, 0.25)), ((-0.25, 0.25), (0.3, 0.25)),
            ((-0.25, -0.25), (0.3, -0.25))]
-    p = run(scan_of(segments=box), v0=0.0)
+    p = run(scan_of(segments=box), v0=0.0, safety_margin=0.1)     # every wall within the margin's reach
     assert (p.linear_x, p.angular_z) == (0.0, 0.0)
     assert p.kind == 'stop'
 
@@ -98,19 +98,26 @@ def test_a_wall_close_ahead_turns_in_place_when_turning_is_safe():
 
 
 def test_no_chosen_path_comes_within_the_margin():
+    # The chosen target, followed for the horizon and then braked to rest (what the window judges it by), keeps
+    # the margin its speed asks for from every obstacle.
     rng = numpy.random.default_rng(7)
+    s = NavigatorSettings()
     for _ in range(40):
         circles = [(rng.uniform(0.5, 4), rng.uniform(-2, 2), rng.uniform(0.05, 0.3)) for _ in range(12)]
         circles = [c for c in circles if math.hypot(c[0], c[1]) - c[2] > 0.5]
-        p = run(scan_of(circles=circles), v0=rng.uniform(0, 0.5), w0=rng.uniform(-1, 1))
+        v0, w0 = rng.uniform(0, 0.5), rng.uniform(-1, 1)
+        p = run(scan_of(circles=circles), v0=v0, w0=w0)
         if p.kind == 'stop':
             continue
+        margin = required_margin(s, max(p.target[0], v0))
+        steps = int(math.ceil((s.horizon + max(0.5 / s.accel, 1.5 / s.yaw_accel)) / PREDICTION_STEP_S)) + 1
+        poses = predict(v0, w0, numpy.array([p.target[0]]), numpy.array([p.target[1]]), s, s.horizon, steps)[0]
         shape = outline(FOOTPRINT, 0.01)
-        for x, y, yaw in p.path:
+        for x, y, yaw in poses:
             px = x + math.cos(yaw) * shape[:, 0] - math.sin(yaw) * shape[:, 1]
             py = y + math.sin(yaw) * shape[:, 0] + math.cos(yaw) * shape[:, 1]
             for cx, cy, r in circles:
-                assert numpy.hypot(px - cx, py - cy).min() - r >= 0.1 - 0.01
+                assert numpy.hypot(px - cx, py - cy).min() - r >= margin - 0.01
 
 
 @pytest.mark.parametrize('v, w, axis, first, top, other', [
@@ -160,7 +167,7 @@ def test_a_decision_at_720_rays_in_clutter_is_cheap():
 
 # --- the states, on injected time ----------------------------------------------------------------------------
 
-from closed_loop.control.navigator import CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
+from closed_loop.control.navigator import BLIND_EXTRA_M, CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
 
 
 def test_reaching_the_goal_gives_zero_for_good():
@@ -351,7 +358,6 @@ def test_the_chamfer_transform_never_overstates_by_more_than_its_allowance():
 def test_danger_is_a_path_within_the_margin_of_any_scan_point():
     # in_danger looks only at points near the swept footprint; it must agree with the whole scan's clearance.
     from closed_loop.control.guard import path_clearance
-    from closed_loop.control.local_planner import PREDICTION_STEP_S
     from closed_loop.control.navigator import in_danger
     s = NavigatorSettings()
     rng = numpy.random.default_rng(11)
@@ -361,9 +367,56 @@ def test_danger_is_a_path_within_the_margin_of_any_scan_point():
         v, w = float(rng.uniform(-0.3, 0.8)), float(rng.uniform(-1.5, 1.5))
         steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
         poses = predict(v, w, [v], [w], s, s.horizon, steps)[0]
-        expected = path_clearance(points, JACKAL, poses) < s.safety_margin
+        expected = path_clearance(points, JACKAL, poses) < required_margin(s, v)
         assert in_danger((v, w), points, s, JACKAL) == expected
         seen.add(expected)
     assert seen == {True, False}
     assert not in_danger((0.0, 0.0), numpy.zeros((1, 2)), s, JACKAL)
     assert not in_danger((0.5, 0.0), numpy.zeros((0, 2)), s, JACKAL)
+
+
+def test_following_the_way_where_the_window_would_stand_heads_along_it_and_keeps_the_margin():
+    # In clutter where the window would stand or turn in place, ``follow`` turns toward the aim (heading first)
+    # or drives an arc through it; each such command, followed and braked, keeps its margin; without
+    # ``follow`` the window's own command stands.
+    from closed_loop.control.guard import path_clearance
+    rng = numpy.random.default_rng(3)
+    s = NavigatorSettings()
+    followed = 0
+    for _ in range(200):
+        circles = [(rng.uniform(0.3, 3), rng.uniform(-1.5, 1.5), rng.uniform(0.05, 0.3)) for _ in range(25)]
+        circles = [c for c in circles if math.hypot(c[0], c[1]) - c[2] > 0.3]
+        scan = scan_of(circles=circles)
+        alone = plan(scan, LASER, JACKAL, 0.0, 0.0, (6.0, 0.0), s)
+        p = plan(scan, LASER, JACKAL, 0.0, 0.0, (6.0, 0.0), s, follow=True)
+        assert 'the way round' not in alone.reason
+        if 'the way round' not in p.reason:
+            assert (p.linear_x, p.angular_z) == (alone.linear_x, alone.angular_z)
+            continue
+        followed += 1
+        assert alone.target[0] == 0.0 and p.way is not None
+        v, w = p.target
+        bearing = math.atan2(p.aim_xy[1], p.aim_xy[0])
+        assert numpy.sign(w) == numpy.sign(bearing) and (v == 0.0) == (abs(bearing) > 0.3)
+        poses = predict(0.0, 0.0, numpy.array([v]), numpy.array([w]), s, s.horizon, 20)[0]
+        assert path_clearance(scan_points(scan, LASER), JACKAL, poses) >= required_margin(s, v)
+    assert followed >= 10
+
+
+@pytest.mark.parametrize('extra, turns', [(0.0, True), (BLIND_EXTRA_M, False)])
+def test_a_recovery_turn_keeps_more_than_the_margin_from_what_it_remembers_where_the_scan_cannot_see(
+        monkeypatch, extra, turns):
+    # Two posts behind the Jackal's back corners, seen once by a full turn of scan, then out of sight of its
+    # 270-degree LIDAR: a turn in place would sweep a back corner 0.08 m from one of them, which keeps the
+    # margin (0.05 m) but not the margin and BLIND_EXTRA_M (remembered points are as wrong as odometry).
+    monkeypatch.setattr(navigator_module, 'BLIND_EXTRA_M', extra)
+    corner = math.hypot(JACKAL.x_max, JACKAL.y_max)
+    posts = [((corner + 0.1) * math.cos(a), (corner + 0.1) * math.sin(a), 0.02) for a in (2.62, -2.62)]
+    wall = ((0.45, -3.0), (0.45, 3.0))
+    nav = Navigator(NavigatorSettings(stuck_timeout=1.0), (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
+    nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(circles=posts, segments=[wall]), LASER, JACKAL)
+    full = scan_of(segments=[wall])
+    front = Scan(0.0, 'laser', -3 * math.pi / 4, 3 * math.pi / 4, full.angle_increment, 0.0, 0.1, full.range_min,
+                 full.range_max, full.ranges[RAYS // 8:RAYS - RAYS // 8 + 1])
+    reasons = [nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, front, LASER, JACKAL).reason for i in range(1, 40)]
+    assert ('turning to try the other side' in reasons) == turns, reasons

@@ -65,3 +65,17 @@ def test_points_older_than_the_memory_are_forgotten():
     assert (memory.t == 0.0).any()
     remember(memory, 6.0, (0.0, 0.0, 0.0), scan_of(numpy.full(RAYS, numpy.nan), 6.0))    # no reading at all
     assert not (memory.t == 0.0).any()
+
+
+def test_a_point_where_the_robot_stands_is_forgotten():
+    # Seen 2 m ahead, then the robot (by odometry) stands on it: odometry misplaced it, since the robot is
+    # there. A point beside the footprint stays.
+    from closed_loop.robot_model import Footprint
+    footprint = Footprint(-0.25, 0.25, -0.2, 0.2)
+    memory = ScanMemory(60.0)
+    remember(memory, 0.0, (0.0, 0.0, 0.0), wall_ahead(2.0))
+    blind = scan_of(numpy.full(RAYS, numpy.nan), 1.0)            # no reading: nothing seen, nothing seen through
+    memory.add(1.0, (1.9, 0.0, 0.0), scan_points(blind, LASER), blind, LASER, footprint)
+    assert len(memory.xy) and (numpy.abs(memory.xy[:, 1]) > 0.2).all()
+    memory.add(2.0, (1.9, 0.0, 0.0), scan_points(blind, LASER), blind, LASER)   # no footprint given: kept
+    assert (numpy.abs(memory.xy[:, 1]) > 0.2).all()

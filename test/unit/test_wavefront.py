@@ -43,3 +43,30 @@ def test_a_wall_with_one_gap_is_passed_only_where_the_gap_is_wide_enough(gap):
     wall = wall[numpy.abs(wall[:, 1] - 1.0) > gap / 2]
     found = wavefront.way(wall, (4.0, 0.0), 0.35, 1.0)
     assert (found is not None) == (gap > 0.7 + 0.1)
+
+
+def wall_with_gaps(*gaps):
+    """A wall across the way 2 m ahead, open 1 m wide round each of ``gaps`` (y, m)."""
+    ys = numpy.arange(-5.0, 5.0, 0.05)
+    keep = numpy.ones(len(ys), bool)
+    for y in gaps:
+        keep &= numpy.abs(ys - y) > 0.5
+    return numpy.column_stack((numpy.full(keep.sum(), 2.0), ys[keep]))
+
+
+def test_the_way_followed_is_kept_while_it_is_open_and_not_much_longer():
+    goal = (4.0, 0.0)
+    # Only the right gap open: the way goes through it; that is the way followed.
+    followed = wavefront.way(wall_with_gaps(-1.2), goal, 0.35, 1.0).route()
+    assert followed[:, 1].min() < -0.8
+    # The left gap opens too, a little nearer: the way followed is kept, not swapped for the new shortest.
+    wall = wall_with_gaps(1.0, -1.2)
+    assert wavefront.way(wall, goal, 0.35, 1.0).aim[1] > 0.3
+    kept = wavefront.way(wall, goal, 0.35, 1.0, kept=followed)
+    assert kept.aim[1] < -0.3 and kept.goal == goal and numpy.allclose(kept.route()[-1], goal)
+    # The right gap closes: the way goes left.
+    closed = numpy.concatenate((wall, [(2.0, y) for y in numpy.arange(-1.7, -0.7, 0.05)]))
+    assert wavefront.way(closed, goal, 0.35, 1.0, kept=followed).aim[1] > 0.3
+    # A way followed far longer than the new shortest is dropped.
+    detour = wavefront.way(wall_with_gaps(-2.8), goal, 0.35, 1.0).route()
+    assert wavefront.way(wall_with_gaps(1.0, -2.8), goal, 0.35, 1.0, kept=detour).aim[1] > 0.3

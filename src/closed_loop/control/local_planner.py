@@ -10,9 +10,13 @@ histogram picks a direction and leaves the footprint to a margin; the window che
 
 Safety: each candidate is followed for ``horizon`` seconds (a control period and the scan's delay, with room
 to spare) and then braked to rest at the robot's deceleration; its clearance is the least distance between
-the footprint, at every predicted pose, and any scan point. A command whose clearance comes under
-``safety_margin`` is never chosen (when the robot is already closer than the margin, only a turn in place
-that does not bring it closer is). With no safe command it stops. Preference: each candidate is also
+the footprint, at every predicted pose, and any scan point. A command whose clearance comes under its
+margin (``required_margin``: ``safety_margin``, and ``margin_per_speed`` more per m/s of its speed) is never
+chosen (when the robot is already closer than the margin, only a turn in place that does not bring it
+closer is). With no safe command it stops. Where the window would stand or turn in place while a way is
+there (``follow``, which the navigator asks after a second without progress), it follows the way instead,
+heading first: at a gap only a little wider than the robot, every arc through it keeps less room than
+standing still, and the window alone would turn back and forth before it. Preference: each candidate is also
 followed for ``lookahead`` seconds without braking, and scored on where that arc points (toward the goal),
 how much room it keeps, how fast it goes, and how long it runs before it would come within the margin.
 The robot re-plans every period, so the long arc is a preference, the short one a guarantee.
@@ -43,13 +47,19 @@ PREFERENCE_STEP_S = 0.2
 CLEARANCE_CAP_M = 1.0
 #: The way to the aim must be this much wider (m, each side) than the robot plus its margins: a gap the
 #: window could only just pass is not one to aim for.
-AIM_ROOM_M = 0.05
+AIM_ROOM_M = 0.02
 #: At most this many candidates in doubt are checked exactly per decision (each costs about 0.1 ms).
 EXACT_CHECKS = 4
 #: An aim more than this far (rad) to a side decides which way to turn in place.
 AIM_SIDE_RAD = 0.2
 #: With a corridor (no goal), this near (m) to where its line is closed off, the robot stops: blocked.
 BLOCKED_STOP_M = 0.3
+#: Following the way where the window would stand: turn in place toward the aim while it lies more than
+#: PURSUIT_TURN_RAD to a side (at the first of PURSUIT_TURN_RADPS that keeps the margin), else drive an arc
+#: through it at the first of PURSUIT_SPEEDS (x max_speed) that does.
+PURSUIT_TURN_RAD = 0.3
+PURSUIT_TURN_RADPS = (0.8, 0.4)
+PURSUIT_SPEEDS = (0.5, 0.25, 0.125)
 #: Candidates per axis of the window.
 LINEAR_SAMPLES = 5
 ANGULAR_SAMPLES = 15
@@ -122,6 +132,35 @@ def candidate_speeds(max_speed, max_yaw_rate):
     return v, w
 
 
+def _pursue(aim_xy, near, footprint, v0, w0, s, steps):
+    """Toward ``aim_xy`` (the robot's frame) along the way, heading first: a turn in place while it lies more
+    than PURSUIT_TURN_RAD to a side, else an arc through it at the fastest of PURSUIT_SPEEDS (x
+    ``max_speed``) whose path keeps the margin, judged exactly; (v, w, predicted poses, their clearance, why),
+    or None when none keeps it."""
+    distance, bearing = math.hypot(*aim_xy), math.atan2(aim_xy[1], aim_xy[0])
+    if abs(bearing) > PURSUIT_TURN_RAD:
+        options = [(0.0, math.copysign(min(s.max_yaw_rate, rate), bearing)) for rate in PURSUIT_TURN_RADPS]
+        why = 'turning in place toward the way round (%.2f rad off)' % bearing
+    else:
+        curvature = 2.0 * aim_xy[1] / max(distance ** 2, 1e-9)
+        options = [(f * s.max_speed, max(-s.max_yaw_rate, min(s.max_yaw_rate, f * s.max_speed * curvature)))
+                   for f in PURSUIT_SPEEDS]
+        why = 'following the way round %.2f m to its aim' % distance
+    for v, w in options:
+        poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
+        clearance = path_clearance(near, footprint, poses)
+        if clearance >= required_margin(s, max(v, abs(v0))):
+            return v, w, poses, clearance, why
+    return None
+
+
+def required_margin(settings, speed):
+    """The clearance (m) a path driven at ``speed`` (m/s, the faster of the command's and the robot's) must
+    keep: ``safety_margin`` at rest, ``margin_per_speed`` more per m/s (a base at speed strays farther
+    from the predicted arc: a skid-steer one turns less than its wheels say)."""
+    return settings.safety_margin + settings.margin_per_speed * abs(speed)
+
+
 def check_finite(name, *values):
     for value in values:
         if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
@@ -155,14 +194,15 @@ def step_toward(target, previous, measured, rate, period_s, limit):
 
 def _confirm(score, safe, maybe, near, footprint, poses, margin):
     """The best-scoring candidate that is safe: one the grid left in doubt (``maybe``) is checked exactly
-    against the points, best first, at most EXACT_CHECKS of them; ``safe`` and ``score`` are updated.
+    against the points and its ``margin`` (each candidate's), best first, at most EXACT_CHECKS of them;
+    ``safe`` and ``score`` are updated.
     None when none is safe."""
     for _ in range(EXACT_CHECKS):
         best = int(numpy.argmax(score))
         if score[best] == -numpy.inf or safe[best]:
             break
         maybe[best] = False
-        if keeps_margin(near, footprint, poses[best], margin):
+        if keeps_margin(near, footprint, poses[best], float(margin[best])):
             safe[best] = True
         else:
             score[best] = -numpy.inf
@@ -172,7 +212,7 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
 
 
 def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0, scanned=None,
-         previous=None, corridor=None, closed=None):
+         previous=None, corridor=None, closed=None, kept_way=None, follow=False):
     """The command for now: a :class:`Plan`.
 
     ``scan``: a :class:`closed_loop.control.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
@@ -184,7 +224,10 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     round), 0 otherwise; ``scanned``: the scan's points in the robot's frame if already computed;
     ``previous``: the command sent last (m/s, rad/s), which the step is taken from; ``corridor``: where
     the way round may go (``closed_loop.control.wavefront.aim``'s), None for anywhere; ``closed``: points
-    (M, 2, the robot's frame) the way keeps off as it does the scan's (places closed to it), never for safety.
+    (M, 2, the robot's frame) the way keeps off as it does the scan's (places closed to it), never for safety;
+    ``kept_way``: (N, 2) the way followed until now, in the robot's frame (``closed_loop.control.wavefront.way``'s
+    ``kept``); ``follow``: where the window would stand or turn in place, follow the way instead, heading first
+    (the navigator asks this once it has made no progress for a while).
     """
     check_finite('v0, w0', v0, w0)
     check_finite('goal_xy', *goal_xy)
@@ -212,10 +255,12 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     v, w = candidate_speeds(s.max_speed, s.max_yaw_rate)
     safe_poses = predict(v0, w0, v, w, s, s.horizon, safe_steps)
     clear = clearances(field, shape, safe_poses, OUTLINE_STEP_M).min(axis=1)
-    safe = clear >= s.safety_margin
+    # Each candidate's margin grows with the faster of its speed and the speed now (required_margin).
+    margin = s.safety_margin + s.margin_per_speed * numpy.maximum(v, abs(v0))
+    safe = clear >= margin
     # The grid reads low by up to FIELD_ERROR_M: a candidate that reads that little short of the margin may
     # yet keep it, and is checked exactly if it scores best (below).
-    maybe = ~safe & (clear >= s.safety_margin - FIELD_ERROR_M)
+    maybe = ~safe & (clear >= margin - FIELD_ERROR_M)
     now = float(edge_clearance(field.at(shape).min(), OUTLINE_STEP_M))
     if now < s.safety_margin:
         now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
@@ -236,7 +281,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
     seen = numpy.concatenate([scanned] + [extra for extra in (remembered, closed) if extra is not None and len(extra)])
     way = wavefront.way(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
-                        0.5 * (footprint.y_max - footprint.y_min), corridor)
+                        0.5 * (footprint.y_max - footprint.y_min), corridor, kept_way)
     aim_xy = goal_xy if way is None else way.aim
     if corridor is not None and way is not None and way.goal != tuple(goal_xy):
         # The line is closed off within the corridor: go up to where, steering for the far point (which keeps
@@ -273,7 +318,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     score = (free * (s.heading_weight * heading + s.speed_weight * speed) + s.progress_weight * progress
              + s.clearance_weight * room)
     score = numpy.where(safe | maybe, score, -numpy.inf)
-    best = _confirm(score, safe, maybe, near, footprint, safe_poses, s.safety_margin)
+    best = _confirm(score, safe, maybe, near, footprint, safe_poses, margin)
     candidates[:, 3] = safe
     if best is None:
         return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
@@ -295,13 +340,24 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
             toward = 1.0 if left >= right else -1.0
         order = sorted(numpy.nonzero(turns)[0], key=lambda i: (numpy.sign(w[i]) != toward, -abs(w[i])))
         for i in order[:EXACT_CHECKS]:
-            if safe[i] or keeps_margin(near, footprint, safe_poses[i], s.safety_margin):
+            if safe[i] or keeps_margin(near, footprint, safe_poses[i], float(margin[i])):
                 safe[i] = candidates[i, 3] = True
                 best = int(i)
                 break
+    followed = None
+    if follow and v[best] == 0.0 and way is not None and now >= s.safety_margin:
+        # The window would stand or turn in place, yet a way is there: follow it, heading first (a narrow gap
+        # scores low on room for every arc through it, however the way leads there).
+        followed = _pursue(aim_xy, near, footprint, v0, w0, s, safe_steps)
     # What is sent is one period's step toward the target (step_toward).
     period_s = 1.0 / s.rate_hz
     prev_v, prev_w = (None, None) if previous is None else previous
+    if followed is not None:
+        tv, tw, poses, clearance, why = followed
+        vb = step_toward(tv, prev_v, v0, s.accel, period_s, s.max_speed)
+        wb = step_toward(tw, prev_w, w0, s.yaw_accel, period_s, s.max_yaw_rate)
+        return Plan(vb, wb, 'turn' if tv == 0.0 else 'avoid', why, clearance, poses, candidates, tuple(aim_xy),
+                    (tv, tw), way)
     vb = step_toward(float(v[best]), prev_v, v0, s.accel, period_s, s.max_speed)
     wb = step_toward(float(w[best]), prev_w, w0, s.yaw_accel, period_s, s.max_yaw_rate)
     cb = float(along[best].min())

@@ -13,9 +13,10 @@ import math
 import numpy
 
 from closed_loop.control.guard import footprint_clearance, footprint_clearances, path_clearance, scan_points
-from closed_loop.control.local_planner import PREDICTION_STEP_S, check_finite, plan, predict, step_toward
+from closed_loop.control.local_planner import (PREDICTION_STEP_S, blind_points, check_finite, plan, predict,
+                                               required_margin, step_toward)
 from closed_loop.control.scan import sample_angles
-from closed_loop.control.scan_memory import ScanMemory
+from closed_loop.control.scan_memory import ScanMemory, from_frame, to_frame
 from closed_loop.control.loop import LoopSettings
 from closed_loop.settings import SettingsError, param
 
@@ -28,8 +29,12 @@ class NavigatorSettings(LoopSettings):
     accel: float = param(1.0, 'm/s^2', 'linear acceleration and braking the plan counts on', minimum=0.05,
                          live=True)
     yaw_accel: float = param(3.0, 'rad/s^2', 'yaw acceleration the plan counts on', minimum=0.1, live=True)
-    safety_margin: float = param(0.1, 'm', 'least clearance between the footprint and any scan point along '
-                                 'a chosen path', minimum=0.05, maximum=1.0, live=True)
+    safety_margin: float = param(0.05, 'm', 'least clearance between the footprint and any scan point along '
+                                 'a chosen path, at rest (margin_per_speed adds to it at speed)', minimum=0.05,
+                                 maximum=1.0, live=True)
+    margin_per_speed: float = param(0.08, 's', 'the margin a path keeps grows by this much per m/s of the '
+                                    'faster of its speed and the speed now (a base at speed strays farther from '
+                                    'its predicted arc)', minimum=0.0, maximum=1.0, live=True)
     avoid_distance: float = param(0.5, 'm', 'a chosen path closer than this to an obstacle (or a turn '
                                   'away from the goal) is AVOIDING', minimum=0.0, live=True)
     horizon: float = param(0.5, 's', 'safety: how long a candidate is assumed followed before braking '
@@ -98,9 +103,10 @@ def in_danger(sent, scan_points_xy, settings, footprint):
     poses = predict(v, w, [v], [w], s, s.horizon, steps)[0]
     # Only a point within the margin of the swept footprint counts: none farther from the robot than the
     # farthest pose, the footprint's corner and the margin.
-    reach = float(numpy.hypot(poses[:, 0], poses[:, 1]).max()) + footprint.radius_m + s.safety_margin
+    margin = required_margin(s, v)
+    reach = float(numpy.hypot(poses[:, 0], poses[:, 1]).max()) + footprint.radius_m + margin
     near = scan_points_xy[numpy.hypot(scan_points_xy[:, 0], scan_points_xy[:, 1]) <= reach]
-    return bool(len(near)) and float(footprint_clearances(near, footprint, poses).min()) < s.safety_margin
+    return bool(len(near)) and float(footprint_clearances(near, footprint, poses).min()) < margin
 
 
 class NavState(enum.Enum):
@@ -128,6 +134,12 @@ BACKUP_SPEED_MPS = 0.15
 BACKUP_S = 1.0
 RECOVERY_TURN_RADPS = 0.8
 RECOVERY_TURN_S = 2.0
+#: After this long (s) without progress, where the window would stand or turn in place, the way is followed
+#: instead, heading first (local_planner.plan's ``follow``).
+FOLLOW_AFTER_S = 1.0
+#: A recovery's move keeps this much (m) beyond the margin from remembered points where the scan cannot see:
+#: a skid-steer base turning in place slides a few centimetres that its odometry does not see.
+BLIND_EXTRA_M = 0.05
 #: Where it was stuck is closed to the way for CLOSED_FOR_S: a disc of CLOSED_RADIUS_M (drawn as points
 #: CLOSED_STEP_M apart round its centre, which the way keeps its half-width and margin from) CLOSED_AHEAD_M
 #: ahead of the robot, so the next way found leads elsewhere. Closed places are for the way only, never for
@@ -187,6 +199,7 @@ class Navigator:
         self._stuck_from_s = now_s   # the last progress or the end of the last recovery (stuck_timeout)
         self._recovery = None
         self._closed = []            # places closed to the way: (x, y) in odom, until when (s)
+        self._way = None             # the way followed, (N, 2) in odom, kept while it stays open (wavefront.way)
         self._command = None         # the first step is taken from the measured speed
         if self.state is not NavState.GOAL_SEEKING and now_s is not None:
             self._enter(NavState.GOAL_SEEKING, now_s, 'new goal')
@@ -256,28 +269,31 @@ class Navigator:
             self._enter(NavState.FAILED, now_s, 'no progress for %.1f s (give_up_timeout)' % stalled)
             return Step(self.state, 0.0, 0.0, 'failed')
         if self.state is NavState.RECOVERING:
-            step = self._recover(now_s, v0, w0, scan, laser_pose, footprint)
+            step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
         elif now_s - self._stuck_from_s >= s.stuck_timeout:
             self._recovery = {'started_s': now_s, 'side': self._side}
+            self._way = None
             self._side = -self._side
             self._closed.append(((pose[0] + CLOSED_AHEAD_M * math.cos(pose[2]),
                                   pose[1] + CLOSED_AHEAD_M * math.sin(pose[2])), now_s + CLOSED_FOR_S))
             self._enter(NavState.RECOVERING, now_s, 'no progress for %.1f s (stuck_timeout): the place %.2f m '
                         'ahead is closed to the way for %.0f s' % (stalled, CLOSED_AHEAD_M, CLOSED_FOR_S))
-            step = self._recover(now_s, v0, w0, scan, laser_pose, footprint)
+            step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
         if scan is not self._remembered_scan:
             self._remembered_scan, self._scanned = scan, self.scanned(scan, laser_pose)
-            self._memory.add(now_s, pose, self._scanned, scan, laser_pose)
+            self._memory.add(now_s, pose, self._scanned, scan, laser_pose, footprint)
         if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
-            step = self._final_approach(now_s, goal_local, v0, w0, scan, laser_pose, footprint)
+            step = self._final_approach(now_s, pose, goal_local, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
         p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
-                 self._scanned, self._command, self.corridor(pose), self._closed_points(now_s, pose))
+                 self._scanned, self._command, self.corridor(pose), self._closed_points(now_s, pose),
+                 None if self._way is None else to_frame(self._way, pose), stalled >= FOLLOW_AFTER_S)
+        self._way = None if p.way is None else from_frame(p.way.route(), pose)
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
@@ -288,17 +304,20 @@ class Navigator:
         self._closed = [(xy, until) for xy, until in self._closed if until > now_s]
         if not self._closed:
             return None
-        x, y, yaw = pose
-        c, s = math.cos(yaw), math.sin(yaw)
         n = max(3, int(math.ceil(2 * math.pi * CLOSED_RADIUS_M / CLOSED_STEP_M)))
         around = 2 * math.pi * numpy.arange(n) / n
         disc = numpy.concatenate(([[0.0, 0.0]], CLOSED_RADIUS_M * numpy.column_stack((numpy.cos(around),
                                                                                      numpy.sin(around)))))
-        points = numpy.concatenate([disc + xy for xy, _ in self._closed])
-        dx, dy = points[:, 0] - x, points[:, 1] - y
-        return numpy.column_stack((c * dx + s * dy, -s * dx + c * dy))
+        return to_frame(numpy.concatenate([disc + xy for xy, _ in self._closed]), pose)
 
-    def _final_approach(self, now_s, goal_local, v0, w0, scan, laser_pose, footprint):
+    def _guarded(self, pose, scan, laser_pose):
+        """The points every command's path is checked against (the robot's frame): the scan's, and where the
+        scanner cannot see (behind a LIDAR of less than a full turn), those remembered there."""
+        scanned = self.scanned(scan, laser_pose)
+        blind = blind_points(self._memory.points(pose), scan, laser_pose)
+        return numpy.concatenate((scanned, blind)) if len(blind) else scanned
+
+    def _final_approach(self, now_s, pose, goal_local, v0, w0, scan, laser_pose, footprint):
         """The last metre, where the window's coarse speeds would circle the goal: turn toward it, and drive
         at it slower the closer it is, if that path keeps the margin (judged exactly); else None."""
         s = self.settings
@@ -307,7 +326,8 @@ class Navigator:
         v = 0.0 if abs(bearing) > FINAL_DRIVE_RAD else min(s.max_speed, FINAL_SPEED_GAIN * distance) * math.cos(bearing)
         steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel + 1.0) / PREDICTION_STEP_S))
         poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
-        if path_clearance(self._scanned, footprint, poses) < s.safety_margin:
+        margin = required_margin(s, max(v, abs(v0)))
+        if path_clearance(self._guarded(pose, scan, laser_pose), footprint, poses) < margin:
             return None
         period_s = 1.0 / s.rate_hz
         # One period's step toward (v, w), as the window's (local_planner.step_toward).
@@ -319,18 +339,23 @@ class Navigator:
         self._enter(NavState.GOAL_SEEKING, now_s, why)
         return Step(NavState.GOAL_SEEKING, v, w, why)
 
-    def _recover(self, now_s, v0, w0, scan, laser_pose, footprint):
+    def _recover(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         """The recovery's command now, or None when it is over (then seek again, with a fresh timer)."""
         s = self.settings
         elapsed = now_s - self._recovery['started_s']
-        points = scan_points(scan, laser_pose)
+        points = self.scanned(scan, laser_pose)
+        blind = blind_points(self._memory.points(pose), scan, laser_pose)
         now_clear = footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
 
         def safe(v, w, seconds):
+            # Within the margin of what the scan shows, a move that brings nothing closer; where it cannot see,
+            # BLIND_EXTRA_M more than the margin, always (remembered points are only as right as odometry).
             poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, seconds,
                             int(math.ceil((seconds + 1.0) / PREDICTION_STEP_S)))[0]
+            margin = required_margin(s, v)
             clearance = path_clearance(points, footprint, poses)
-            return clearance >= s.safety_margin or clearance >= now_clear - 1e-3
+            return ((clearance >= margin or clearance >= now_clear - 1e-3)
+                    and path_clearance(blind, footprint, poses) >= margin + BLIND_EXTRA_M)
         if elapsed < BACKUP_S:
             if rear_seen(scan, laser_pose) and safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
                 return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')

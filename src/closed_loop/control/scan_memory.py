@@ -16,6 +16,21 @@ CELL_M = 0.1
 SEE_THROUGH_M = 0.15
 
 
+def to_frame(points, pose):
+    """``points`` ((N, 2), odom) in the frame of a robot at ``pose`` (x, y, yaw in odom)."""
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    dx, dy = points[:, 0] - x, points[:, 1] - y
+    return numpy.column_stack((c * dx + s * dy, -s * dx + c * dy))
+
+
+def from_frame(points, pose):
+    """``points`` ((N, 2), the frame of a robot at ``pose``) in odom."""
+    x, y, yaw = pose
+    c, s = math.cos(yaw), math.sin(yaw)
+    return numpy.column_stack((x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]))
+
+
 class ScanMemory:
     """Remembered scan points in odom, with the time each was last seen."""
 
@@ -27,9 +42,11 @@ class ScanMemory:
     def clear(self):
         self.xy, self.t = numpy.zeros((0, 2)), numpy.zeros(0)
 
-    def add(self, now_s, pose, points, scan, laser_pose):
+    def add(self, now_s, pose, points, scan, laser_pose, footprint=None):
         """Remember ``points`` ((N, 2), robot frame) of ``scan`` taken at ``pose`` (x, y, yaw in odom);
-        forget what is too old and what the scan's rays pass through."""
+        forget what is too old, what the scan's rays pass through, and what lies within ``footprint`` (the
+        robot's rectangle, if given) at ``pose``: the robot stands there, so a point there is one odometry
+        misplaced."""
         x, y, yaw = pose
         c, s = math.cos(yaw), math.sin(yaw)
         keep = self.t >= now_s - self.memory_s
@@ -50,6 +67,10 @@ class ScanMemory:
             ranges[ranges == numpy.inf] = scan.range_max
             with numpy.errstate(invalid='ignore'):
                 kept = ~(numpy.hypot(bx, by) < ranges - SEE_THROUGH_M)      # not seen through
+            if footprint is not None:
+                rx, ry = bx + laser_pose.x, by + laser_pose.y               # the robot's frame
+                kept &= ((rx < footprint.x_min) | (rx > footprint.x_max) | (ry < footprint.y_min)
+                         | (ry > footprint.y_max))
             old, old_t = old[kept], old_t[kept]
         new = numpy.column_stack((x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]))
         xy = numpy.concatenate((new, old))
@@ -68,10 +89,7 @@ class ScanMemory:
 
     def points(self, pose):
         """The remembered points in the robot's frame at ``pose`` (x, y, yaw in odom), (M, 2)."""
-        x, y, yaw = pose
-        c, s = math.cos(yaw), math.sin(yaw)
-        dx, dy = self.xy[:, 0] - x, self.xy[:, 1] - y
-        return numpy.column_stack((c * dx + s * dy, -s * dx + c * dy))
+        return to_frame(self.xy, pose)
 
     def occupancy(self):
         """What is remembered as a grid in odom: (origin (x, y) m of cell (0, 0)'s corner, (rows, columns) bool,

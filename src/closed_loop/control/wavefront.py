@@ -17,6 +17,9 @@ the map):
   where the straight line to the goal is passable all the way, that line is the way (no wave), and the
   aim is on it exactly. The grid is placed with the robot at a cell's centre.
 
+The way followed at the last decision is kept while it stays open and not much longer than the shortest
+(``kept``): where two ways are about as short, each new scan would otherwise swing the aim between them.
+
 A ``corridor`` (a line through the goal, and a half-width) closes every cell farther from the line than
 that, and where the goal cannot be reached within it, the goal moves back along the line to the farthest
 point that can: the navigator with no goal goes round what stands on its line, and up to a wall across the
@@ -39,6 +42,12 @@ START_SEARCH_M = 0.8
 GROWTH_CHECK = 4
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 _SQUARE = numpy.ones((3, 3), numpy.uint8)
+#: A way kept from the last decision stays the way while it is at most KEEP_LONGER x the shortest + KEEP_EXTRA_M.
+KEEP_LONGER = 1.2
+KEEP_EXTRA_M = 0.5
+#: The wave's rounds to the start, times CELL_M and this, is at least the shortest way's length (alternating
+#: 4- and 8-neighbour steps make the octagonal distance, at most 8% short of the Euclidean).
+OCTAGONAL_M = 1.08
 _NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
 
 #: What :func:`way` found: the point to steer for, and the goal the way leads to (the goal given, or the
@@ -68,7 +77,7 @@ def aim(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
     return None if found is None else found.aim
 
 
-def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
+def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None, kept=None):
     """The :class:`Way` to the goal, or None when the points show none.
 
     ``points``: (N, 2) obstacle points in the robot's frame (the scan's, and those remembered of recent
@@ -77,7 +86,11 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
     keep (default ``half_width_m``; the robot's half-width alone lets the aim round a corner the way
     itself keeps the margin from); ``corridor``: ((x, y) a point of a line through the goal, (dx, dy) its
     unit direction, half-width m), all in the robot's frame: the way stays within the half-width of that
-    line, to the goal or, if it is closed off, to the farthest point of the line before it that is not."""
+    line, to the goal or, if it is closed off, to the farthest point of the line before it that is not;
+    ``kept``: (N, 2) the way followed until now (its ``route()`` at the last decision, in the robot's frame
+    now, ending at the goal): it stays the way while all of it from the point nearest the robot on is still
+    passable and it is at most KEEP_LONGER x the shortest way + KEEP_EXTRA_M (where two ways are about as
+    short, a small change in the points would otherwise swing the robot from one to the other and back)."""
     x0, y0, cols, rows, (gx, gy) = _box(goal_xy)
     # The room at each cell's centre, read from a distance transform FINE times finer (accurate to a fine
     # cell's half-diagonal, where the coarse grid alone would be off by up to 0.14 m).
@@ -146,6 +159,11 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
         cv2.add(count, left, dst=count)
         cv2.subtract(left, grown, dst=left)
         front = grown
+    if kept is not None and corridor is None:
+        followed = _follow(kept, goal, passable, in_sight, start, (x0, y0), aim_m,
+                           KEEP_LONGER * OCTAGONAL_M * CELL_M * k + KEEP_EXTRA_M)
+        if followed is not None:
+            return followed
     steps = numpy.where(passable & (left == 0), count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
     # Down the wave from the start, aim_m of path. The aim is the farthest point of the way in sight of the
     # start through passable cells: steering for a point beyond a bend would cut the corner into what the
@@ -156,6 +174,41 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None):
     if steps[cells[-1]] == 0:
         return Way(tuple(goal), tuple(goal), route)
     return Way(centre(cells[-1]), tuple(goal), route)
+
+
+def _follow(kept, goal, passable, in_sight, start, origin, aim_m, longest_m):
+    """The :class:`Way` along ``kept`` ((N, 2) points, the robot's frame) from its point nearest the robot, if
+    it still ends at ``goal``, every cell it crosses from there is passable and it is at most ``longest_m``
+    long; else None."""
+    kept = numpy.asarray(kept, float)
+    if len(kept) < 2 or math.hypot(kept[-1][0] - goal[0], kept[-1][1] - goal[1]) > 0.5 * CELL_M:
+        return None
+    segments = kept[1:] - kept[:-1]
+    lengths = numpy.hypot(segments[:, 0], segments[:, 1])
+    # The point of each segment nearest the robot (the origin); the way goes on from the nearest of them.
+    t = numpy.clip(-(kept[:-1] * segments).sum(axis=1) / numpy.maximum(lengths ** 2, 1e-12), 0.0, 1.0)
+    foot = kept[:-1] + t[:, None] * segments
+    n = int(numpy.argmin(numpy.hypot(foot[:, 0], foot[:, 1])))
+    ahead = numpy.concatenate(([foot[n]], kept[n + 1:]))
+    along = numpy.concatenate(([0.0], numpy.cumsum(numpy.hypot(*numpy.diff(ahead, axis=0).T))))
+    if along[-1] > longest_m:
+        return None
+    # Samples half a cell apart along it, each read in the grid.
+    at = numpy.arange(0.0, along[-1], 0.5 * CELL_M)
+    samples = numpy.column_stack((numpy.interp(at, along, ahead[:, 0]), numpy.interp(at, along, ahead[:, 1])))
+    x0, y0 = origin
+    rows, cols = passable.shape
+    i = ((samples[:, 1] - y0) / CELL_M).astype(numpy.intp)
+    j = ((samples[:, 0] - x0) / CELL_M).astype(numpy.intp)
+    if (i < 0).any() or (i >= rows).any() or (j < 0).any() or (j >= cols).any() or not passable[i, j].all():
+        return None
+    aim_xy = tuple(ahead[-1])
+    for index in numpy.nonzero(at <= aim_m)[0][::-1]:
+        if _in_sight(in_sight, start, (int(i[index]), int(j[index]))):
+            aim_xy = tuple(samples[index]) if at[index] < along[-1] else aim_xy
+            break
+    route = numpy.concatenate(([(0.0, 0.0)], ahead))
+    return Way((float(aim_xy[0]), float(aim_xy[1])), tuple(kept[-1]), lambda: route)
 
 
 def _route(points, goal):
