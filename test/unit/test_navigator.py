@@ -403,12 +403,13 @@ def test_following_the_way_where_the_window_would_stand_heads_along_it_and_keeps
     assert followed >= 10
 
 
-@pytest.mark.parametrize('extra, turns', [(0.0, True), (BLIND_EXTRA_M, False)])
+@pytest.mark.parametrize('extra, seen_ago, turns', [(0.0, 0.0, True), (BLIND_EXTRA_M, 0.0, False), (0.0, 30.0, False)])
 def test_a_recovery_turn_keeps_more_than_the_margin_from_what_it_remembers_where_the_scan_cannot_see(
-        monkeypatch, extra, turns):
+        monkeypatch, extra, seen_ago, turns):
     # Two posts behind the Jackal's back corners, seen once by a full turn of scan, then out of sight of its
     # 270-degree LIDAR: a turn in place would sweep a back corner 0.08 m from one of them, which keeps the
-    # margin (0.05 m) but not the margin and BLIND_EXTRA_M (remembered points are as wrong as odometry).
+    # margin (0.05 m) but not the margin and BLIND_EXTRA_M, nor the margin and the drift odometry may have
+    # made since the posts were seen half a minute before (remembered points are as wrong as odometry).
     monkeypatch.setattr(navigator_module, 'BLIND_EXTRA_M', extra)
     corner = math.hypot(JACKAL.x_max, JACKAL.y_max)
     posts = [((corner + 0.1) * math.cos(a), (corner + 0.1) * math.sin(a), 0.02) for a in (2.62, -2.62)]
@@ -418,5 +419,6 @@ def test_a_recovery_turn_keeps_more_than_the_margin_from_what_it_remembers_where
     full = scan_of(segments=[wall])
     front = Scan(0.0, 'laser', -3 * math.pi / 4, 3 * math.pi / 4, full.angle_increment, 0.0, 0.1, full.range_min,
                  full.range_max, full.ranges[RAYS // 8:RAYS - RAYS // 8 + 1])
-    reasons = [nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, front, LASER, JACKAL).reason for i in range(1, 40)]
+    reasons = [nav.update(seen_ago + i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, front, LASER, JACKAL).reason
+               for i in range(1, 40)]
     assert ('turning to try the other side' in reasons) == turns, reasons

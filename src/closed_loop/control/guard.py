@@ -100,6 +100,13 @@ def footprint_clearances(points, footprint, poses):
     return numpy.min(_point_clearances(points, footprint, poses), axis=1)
 
 
+def point_clearances(points, footprint, poses):
+    """(N,): the least distance (m) from the footprint over ``poses`` ((P, 3)) to each of ``points`` (N, 2)."""
+    if len(points) == 0:
+        return numpy.zeros(0)
+    return numpy.min(_point_clearances(points, footprint, poses), axis=0)
+
+
 def _point_clearances(points, footprint, poses):
     """(P, N): the distance (m) from the footprint at each of ``poses`` to each of ``points`` (N >= 1)."""
     poses = numpy.asarray(poses, dtype=float).reshape(-1, 3)

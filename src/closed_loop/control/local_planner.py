@@ -169,12 +169,17 @@ def check_finite(name, *values):
 
 def blind_points(points, scan, laser_pose):
     """Those of ``points`` ((N, 2), the robot's frame) outside the scan's sweep, as seen from the laser."""
+    return points[blind_mask(points, scan, laser_pose)]
+
+
+def blind_mask(points, scan, laser_pose):
+    """(N,) bool: which of ``points`` ((N, 2), the robot's frame) lie outside the scan's sweep."""
     if scan.angle_max - scan.angle_min + scan.angle_increment >= 2 * math.pi - 1e-6 or not len(points):
-        return points[:0]
+        return numpy.zeros(len(points), bool)
     bearing = numpy.arctan2(points[:, 1] - laser_pose.y, points[:, 0] - laser_pose.x) - laser_pose.yaw
     middle, half = 0.5 * (scan.angle_min + scan.angle_max), 0.5 * (scan.angle_max - scan.angle_min)
     off = numpy.abs(numpy.arctan2(numpy.sin(bearing - middle), numpy.cos(bearing - middle)))
-    return points[off > half + scan.angle_increment]
+    return off > half + scan.angle_increment
 
 
 def step_toward(target, previous, measured, rate, period_s, limit):

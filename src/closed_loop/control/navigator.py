@@ -12,9 +12,10 @@ import math
 
 import numpy
 
-from closed_loop.control.guard import footprint_clearance, footprint_clearances, path_clearance, scan_points
-from closed_loop.control.local_planner import (PREDICTION_STEP_S, blind_points, check_finite, plan, predict,
-                                               required_margin, step_toward)
+from closed_loop.control.guard import (footprint_clearance, footprint_clearances, path_clearance, point_clearances,
+                                       scan_points)
+from closed_loop.control.local_planner import (PREDICTION_STEP_S, blind_mask, blind_points, check_finite, plan,
+                                               predict, required_margin, step_toward)
 from closed_loop.control.scan import sample_angles
 from closed_loop.control.scan_memory import ScanMemory, from_frame, to_frame
 from closed_loop.control.loop import LoopSettings
@@ -137,9 +138,12 @@ RECOVERY_TURN_S = 2.0
 #: After this long (s) without progress, where the window would stand or turn in place, the way is followed
 #: instead, heading first (local_planner.plan's ``follow``).
 FOLLOW_AFTER_S = 1.0
-#: A recovery's move keeps this much (m) beyond the margin from remembered points where the scan cannot see:
-#: a skid-steer base turning in place slides a few centimetres that its odometry does not see.
+#: A recovery's move keeps BLIND_EXTRA_M, and BLIND_DRIFT_MPS for each second since it was seen, beyond the
+#: margin from a point remembered where the scan cannot see: a skid-steer base turning in place slides a few
+#: centimetres its odometry does not see, and among posts its odometry drifted about 5 mm a second (0.37 m in
+#: 80 s of a Jackal's BARN run, turning in pockets).
 BLIND_EXTRA_M = 0.05
+BLIND_DRIFT_MPS = 0.005
 #: Where it was stuck is closed to the way for CLOSED_FOR_S: a disc of CLOSED_RADIUS_M (drawn as points
 #: CLOSED_STEP_M apart round its centre, which the way keeps its half-width and margin from) CLOSED_AHEAD_M
 #: ahead of the robot, so the next way found leads elsewhere. Closed places are for the way only, never for
@@ -344,18 +348,21 @@ class Navigator:
         s = self.settings
         elapsed = now_s - self._recovery['started_s']
         points = self.scanned(scan, laser_pose)
-        blind = blind_points(self._memory.points(pose), scan, laser_pose)
+        remembered = self._memory.points(pose)
+        blind = blind_mask(remembered, scan, laser_pose)
+        # Where the scan cannot see, what is remembered is only as right as odometry since it was seen.
+        blind, doubt = remembered[blind], BLIND_EXTRA_M + BLIND_DRIFT_MPS * (now_s - self._memory.t[blind])
         now_clear = footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
 
         def safe(v, w, seconds):
-            # Within the margin of what the scan shows, a move that brings nothing closer; where it cannot see,
-            # BLIND_EXTRA_M more than the margin, always (remembered points are only as right as odometry).
+            # Within the margin of what the scan shows, a move that brings nothing closer; from each point
+            # remembered where it cannot see, the margin and that point's doubt, always.
             poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, seconds,
                             int(math.ceil((seconds + 1.0) / PREDICTION_STEP_S)))[0]
             margin = required_margin(s, v)
             clearance = path_clearance(points, footprint, poses)
             return ((clearance >= margin or clearance >= now_clear - 1e-3)
-                    and path_clearance(blind, footprint, poses) >= margin + BLIND_EXTRA_M)
+                    and bool((point_clearances(blind, footprint, poses) - doubt >= margin).all()))
         if elapsed < BACKUP_S:
             if rear_seen(scan, laser_pose) and safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
                 return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
