@@ -43,7 +43,7 @@ GROWTH_CHECK = 4
 _CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
 _SQUARE = numpy.ones((3, 3), numpy.uint8)
 #: A way kept from the last decision stays the way while it is at most KEEP_LONGER x the shortest + KEEP_EXTRA_M.
-KEEP_LONGER = 1.2
+KEEP_LONGER = 1.1
 KEEP_EXTRA_M = 0.5
 #: The wave's rounds to the start, times CELL_M and this, is at least the shortest way's length (alternating
 #: 4- and 8-neighbour steps make the octagonal distance, at most 8% short of the Euclidean).
