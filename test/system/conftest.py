@@ -47,17 +47,19 @@ class _PatientTransport(xmlrpc.client.Transport):
         return connection
 
 
-def master_answers(port):
-    """True if a ROS master answers on ``port``: not just anything listening there, since once a graph has
-    let its port go, another test's node may take the same number for its own server."""
+def master_pid(port):
+    """The pid of the ROS master answering on ``port``, or None where none does: not just anything listening
+    there, since once a graph has let its port go, another test's node may take the same number for its own
+    server."""
     if not master_up(port):
-        return False
+        return None
     try:
-        code, _, _ = xmlrpc.client.ServerProxy('http://127.0.0.1:%d' % port, transport=_PatientTransport()) \
-            .getSystemState('/leftover_check')
+        proxy = xmlrpc.client.ServerProxy('http://127.0.0.1:%d' % port, transport=_PatientTransport())
+        code, _, _ = proxy.getSystemState('/leftover_check')
+        pid_code, _, pid = proxy.getPid('/leftover_check')
     except Exception:   # not XML-RPC, or a node's API (it has no getSystemState), or gone meanwhile
-        return False
-    return code == 1
+        return None
+    return pid if code == 1 and pid_code == 1 else None
 
 
 def wait_master(port, process=None, timeout_s=MASTER_WAIT_S):
@@ -157,11 +159,13 @@ def fixture_workspace(tmp_path):
 
 def graph_leftovers(root):
     """What is left of the graph episodes whose folders are under ``root``: the processes that carry their
-    mark (running ones: a zombie has no environment left) and the masters still answering on their ports."""
+    mark (running ones: a zombie has no environment left) and their masters still answering on their ports
+    (a master there that does not carry the mark is another test's, which took the number once it was free)."""
     import glob
     from closed_loop.batch import graph_keeper
     ports = [int(open(path).read()) for path in glob.glob(os.path.join(str(root), '**', 'port'), recursive=True)]
-    return {'processes': graph_keeper.marked_processes(str(root)), 'listening': [p for p in ports if master_answers(p)]}
+    marked = graph_keeper.marked_processes(str(root))
+    return {'processes': marked, 'listening': [p for p in ports if master_pid(p) in marked]}
 
 
 def run_sweep(env, sweep_path, output, *extra, timeout_s=600):
