@@ -35,10 +35,9 @@ class JudgeSettings:
                                   minimum=0.0, exclusive_minimum=True)
     time_limit: float = param(60.0, 's', 'the scenario ends at this simulated time', minimum=0.0,
                               exclusive_minimum=True)
-    rest_speed: float = param(0.01, 'm/s', 'at rest: ground-truth speed under this (and the yaw rate under '
+    rest_speed: float = param(0.005, 'm/s', 'at rest: ground-truth speed under this (and the yaw rate under '
                               'rest_yaw_rate, under a zero command)', minimum=0.0, exclusive_minimum=True)
-    rest_yaw_rate: float = param(0.1, 'rad/s', 'at rest: ground-truth yaw rate under this (a base held at '
-                                 'zero rocks on its wheels by up to 0.075 rad/s)', minimum=0.0,
+    rest_yaw_rate: float = param(0.01, 'rad/s', 'at rest: ground-truth yaw rate under this', minimum=0.0,
                                  exclusive_minimum=True)
     rest_hold: float = param(1.0, 's', 'at rest this long ends the scenario (see end_at_rest)', minimum=0.0)
     first_command_wait: float = param(3.0, 's', 'a robot no command has reached yet is not judged at rest before '
