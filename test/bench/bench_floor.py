@@ -13,6 +13,7 @@ the set-up), the whole episode's (set-up included), and its speed (simulated s p
 the floor with stop_on_obstacle in ``empty`` and ``posts``; set-up of the 300-post world under 20 ms; at least
 40x real time for the Jackal with avoid_obstacles among about 300 posts. Figures, not pass/fail.
 """
+import math
 import os
 import sys
 import time
@@ -20,7 +21,8 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop.batch.episode import EpisodeSpec, load_episode_world, run_episode  # noqa: E402
+from closed_loop.batch.episode import EpisodeSpec, load_episode_world, prepare, run_episode  # noqa: E402
+from closed_loop.batch.lockstep import Tap, command_delay_steps  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 from closed_loop.sim.rig import Rig  # noqa: E402
 
@@ -49,6 +51,42 @@ def floor_cpu_per_s(world, profile):
         rig.close()
 
 
+class Commands(Tap):
+    """Keeps the commands an episode sent, each with the physics step it reached the wheels at."""
+
+    def begin(self, rig, controller, judge):
+        self.dt_s, self.sent = rig.sim.dt_s, []
+
+    def command(self, t_s, command):
+        self.sent.append((int(round(t_s / self.dt_s)), command))
+
+
+def driven_floor(spec, cache, commands, simulated_s):
+    """(CPU s per simulated s of the step alone, least of REPEATS; metres between the replay's end and the
+    episode's): the episode's physics again, its commands replayed open loop at the steps they reached the
+    wheels, no sensor sampled and no controller. A moving robot's step costs more than a resting one's (the
+    Jackal's wheels slip as it drives), so this is the floor the episode itself stands on."""
+    prepared = prepare(spec, cache)
+    best, moved = float('inf'), None
+    for _ in range(REPEATS):
+        rig = Rig(prepared.world, prepared.sim_params, prepared.profile.urdf)
+        try:
+            sim = rig.sim
+            delay = command_delay_steps(spec, sim.dt_s)
+            due = [(k + delay, command) for k, command in commands.sent]
+            steps = int(round(simulated_s / sim.dt_s))
+            started = time.process_time()
+            for k in range(steps):
+                while due and due[0][0] <= k:
+                    sim.command(due.pop(0)[1])
+                sim.step()
+            best = min(best, (time.process_time() - started) / (steps * sim.dt_s))
+            moved = sim.ground_truth()[0].position[:2]
+        finally:
+            rig.close()
+    return best, moved
+
+
 def setup_s(world, profile):
     """CPU s to build the simulation of ``world`` with the robot and its sensors, and to close it (least of
     REPEATS)."""
@@ -60,10 +98,10 @@ def setup_s(world, profile):
     return best
 
 
-def episode_cpu(spec, cache):
+def episode_cpu(spec, cache, tap=None):
     """(CPU s of the whole episode, least of REPEATS, the world already loaded as a sweep's worker has it;
-    the result)."""
-    run_episode(spec, cache)
+    the result); ``tap`` sees the first run."""
+    run_episode(spec, cache, tap=tap)
     best, result = float('inf'), None
     for _ in range(REPEATS):
         started = time.process_time()
@@ -84,16 +122,20 @@ def main():
             floor = floor_cpu_per_s(world, profile)
             setup = setup_s(world, profile)
             spec = EpisodeSpec(world=spec_world, robot=name, controller=controller, time_limit_s=EPISODE_S)
-            whole, result = episode_cpu(spec, {})
+            cache, commands = {}, Commands()
+            whole, result = episode_cpu(spec, cache, commands)
             ran = max(result.simulated_s, 1e-9)          # the simulated time it ran (past time_s: the rest rule)
+            driven, end = driven_floor(spec, cache, commands, ran)
+            apart = math.hypot(end[0] - result.final_pose[0], end[1] - result.final_pose[1])
             running = (whole - setup) / ran
             target = ('target <= %.1fx' % TARGET_RATIO if controller == 'stop_on_obstacle' else
                       'target >= %.0fx real time' % TARGET_CLUTTER_SPEED if name == 'jackal' else '')
-            print('  %-11s %-10s %3d obstacles  floor %5.2f ms/s (%4.0fx)  set-up %5.1f ms  %-16s running %6.2f ms/s '
-                  '= %5.2fx floor, whole %6.2f ms/s = %5.2fx  %4.0fx real time  (%s, %.1f s)  %s'
-                  % (name, world_name, len(world.obstacles), floor * 1e3, 1.0 / floor, setup * 1e3, controller,
-                     running * 1e3, running / floor, whole / ran * 1e3, whole / ran / floor, ran / whole,
-                     result.outcome, ran, target))
+            print('  %-11s %-10s %3d obstacles  floor at rest %5.2f ms/s (%4.0fx), as driven %5.2f ms/s (replay %.0e m '
+                  'off)  set-up %5.1f ms  %-16s running %6.2f ms/s = %5.2fx the floor as driven (%5.2fx at rest), '
+                  'whole %5.2fx / %5.2fx  %4.0fx real time  (%s, %.1f s)  %s'
+                  % (name, world_name, len(world.obstacles), floor * 1e3, 1.0 / floor, driven * 1e3, apart,
+                     setup * 1e3, controller, running * 1e3, running / driven, running / floor, whole / ran / driven,
+                     whole / ran / floor, ran / whole, result.outcome, ran, target))
 
 
 if __name__ == '__main__':

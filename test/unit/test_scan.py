@@ -146,6 +146,40 @@ def test_whole_circle_half_width_takes_every_ray():
     assert reading.distance_m == pytest.approx(1.0)
 
 
+def test_sector_rays_found_once_per_layout_read_each_scan():
+    # The rays of a sector are worked out once for a layout; each scan's own ranges are still read.
+    first, second = clear_ranges(), clear_ranges()
+    first[180], second[181] = 0.8, 0.6
+    assert sector_min(make_scan(first), 0.0, math.pi / 2).distance_m == pytest.approx(0.8)
+    assert sector_min(make_scan(second), 0.0, math.pi / 2).distance_m == pytest.approx(0.6)
+    assert sector_min(make_scan(second), math.pi, math.pi / 4).distance_m == math.inf
+
+
+def test_sector_min_equals_the_sector_by_every_ray_on_random_layouts():
+    rng = numpy.random.default_rng(7)
+    for _ in range(200):
+        count = int(rng.integers(1, 400))
+        increment = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.001, 0.05))
+        angle_min = float(rng.uniform(-4.0, 4.0))
+        ranges = rng.uniform(0.0, 4.0, count)
+        ranges[rng.random(count) < 0.1] = math.nan
+        ranges[rng.random(count) < 0.1] = math.inf
+        ranges[rng.random(count) < 0.05] = -math.inf
+        centre, half = float(rng.uniform(-math.pi, math.pi)), float(rng.uniform(0.01, math.pi))
+        scan = make_scan(ranges, angle_min=angle_min, increment=increment)
+        angles = angle_min + numpy.arange(count) * increment
+        wrapped = numpy.angle(numpy.exp(1j * (angles - centre)))
+        inside = numpy.abs(wrapped) <= half + 1e-3 * abs(increment)
+        usable = usable_ranges(scan)[inside]
+        valid = usable[~numpy.isnan(usable)]
+        reading = sector_min(scan, centre, half)
+        assert (reading.total, reading.valid) == (int(inside.sum()), len(valid))
+        if len(valid):
+            assert reading.distance_m == valid.min()
+        else:
+            assert math.isnan(reading.distance_m)
+
+
 # --- REP 117 ------------------------------------------------------------------------------------
 
 def test_usable_ranges_follow_rep_117():

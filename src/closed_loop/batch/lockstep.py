@@ -104,7 +104,7 @@ def _loop(spec, rig, controller, judge, tap):
     steps_per_scan = max(1, int(round(lidar.period_s / dt)))
     steps_per_tick = max(1, int(round(1.0 / controller.settings.rate_hz / dt)))
     phase = int(round(spec.timer_phase_s / dt)) % steps_per_tick
-    delay = max(1, int(round(spec.command_delay_s / dt)))
+    delay = command_delay_steps(spec, dt)
     camera = rig.sensors.get(Camera) if controller.uses_camera else None
     if camera is not None:
         steps_per_frame = max(1, int(round(camera.period_s / dt)))
@@ -156,6 +156,11 @@ def _loop(spec, rig, controller, judge, tap):
             judge.on_contact(sim.time_s, len(began), began, _pose(sim) if judge.contact_log is not None else None)
             if judge.ended:
                 return
+
+
+def command_delay_steps(spec, dt_s):
+    """How many physics steps after it is sent a command reaches the wheels (at least one)."""
+    return max(1, int(round(spec.command_delay_s / dt_s)))
 
 
 def _judge(sim, judge, now, command, mode, lookout):

@@ -12,6 +12,7 @@ values outside ``[range_min, range_max]`` are invalid too. A raw ``min()`` over 
 this wrong, so use :func:`sector_min` or :func:`nearest`.
 """
 import dataclasses
+import functools
 import math
 import numbers
 from typing import Optional
@@ -109,7 +110,11 @@ def validate_scan(scan):
 def sample_angles(scan):
     """The angle of every ray, ``angle_min + i * angle_increment`` (rad, not wrapped)."""
     validate_scan(scan)
-    return scan.angle_min + numpy.arange(len(scan.ranges)) * scan.angle_increment
+    return _angles(scan.angle_min, scan.angle_increment, len(scan.ranges))
+
+
+def _angles(angle_min, angle_increment, count):
+    return angle_min + numpy.arange(count) * angle_increment
 
 
 def usable_ranges(scan):
@@ -120,13 +125,15 @@ def usable_ranges(scan):
     (limits included) become ``NaN`` (invalid, to be ignored, never treated as clear).
     """
     validate_scan(scan)
-    ranges = scan.ranges
-    usable = numpy.full(ranges.shape, numpy.nan)
-    with numpy.errstate(invalid='ignore'):
-        in_limits = (ranges >= scan.range_min) & (ranges <= scan.range_max)
-    usable[in_limits] = ranges[in_limits]
-    usable[numpy.isposinf(ranges)] = numpy.inf
-    usable[numpy.isneginf(ranges)] = scan.range_min
+    return _usable(scan.ranges, scan.range_min, scan.range_max)
+
+
+def _usable(ranges, range_min, range_max):
+    """:func:`usable_ranges` of some of a scan's ``ranges`` (comparisons with NaN are False, silently)."""
+    usable = numpy.array(ranges, dtype=float)
+    usable[~((ranges >= range_min) & (ranges <= range_max))] = numpy.nan
+    usable[ranges == numpy.inf] = numpy.inf
+    usable[ranges == -numpy.inf] = range_min
     return usable
 
 
@@ -173,11 +180,22 @@ def sector_min(scan, center_rad, half_width_rad):
     """
     _check_angle('center_rad', center_rad)
     _check_angle('half_width_rad', half_width_rad, minimum=0.0)
-    relative = sample_angles(scan) - center_rad
+    validate_scan(scan)
+    inside = _sector(float(scan.angle_min), float(scan.angle_increment), len(scan.ranges), float(center_rad),
+                     float(half_width_rad))
+    return _reading(_usable(scan.ranges[inside], scan.range_min, scan.range_max))
+
+
+@functools.lru_cache(maxsize=64)
+def _sector(angle_min, angle_increment, count, center_rad, half_width_rad):
+    """The indices of the rays in a sector (see :func:`sector_min`); a scan's layout and a controller's sector
+    rarely change, so each is worked out once."""
+    relative = _angles(angle_min, angle_increment, count) - center_rad
     wrapped = math.pi - numpy.mod(math.pi - relative, 2.0 * math.pi)
-    tolerance = EDGE_TOLERANCE_INCREMENTS * abs(scan.angle_increment)
-    inside = numpy.abs(wrapped) <= half_width_rad + tolerance
-    return _reading(usable_ranges(scan)[inside])
+    tolerance = EDGE_TOLERANCE_INCREMENTS * abs(angle_increment)
+    inside = numpy.flatnonzero(numpy.abs(wrapped) <= half_width_rad + tolerance)
+    inside.setflags(write=False)
+    return inside
 
 
 def nearest(scan):
