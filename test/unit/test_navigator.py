@@ -299,6 +299,46 @@ def test_a_new_goal_starts_over():
         nav.set_goal((math.nan, 0.0), now_s=2.0)
 
 
+def front_only(scan):
+    """``scan`` (a full turn from scan_of) cut to a 270-degree LIDAR's rays."""
+    return Scan(0.0, 'laser', -3 * math.pi / 4, 3 * math.pi / 4, scan.angle_increment, 0.0, 0.1, scan.range_min,
+                scan.range_max, scan.ranges[RAYS // 8:RAYS - RAYS // 8 + 1])
+
+
+def test_a_robot_with_no_room_to_turn_backs_out_the_way_it_came_then_turns():
+    # The Jackal drives 1 m straight into a pocket 0.6 m wide (walls beside its front half and ahead): too
+    # narrow to turn in, and its 270-degree LIDAR cannot see behind. Stuck, it backs out along the way it came
+    # (its rear toward its trail) until turning in place is safe, and then turns.
+    pocket = [((-0.1, 0.3), (0.4, 0.3)), ((-0.1, -0.3), (0.4, -0.3)), ((0.4, -0.3), (0.4, 0.3))]
+
+    def scan_at(x, y, yaw):
+        c, s = math.cos(yaw), math.sin(yaw)
+        local = [tuple((c * (px - x) + s * (py - y), -s * (px - x) + c * (py - y)) for px, py in wall)
+                 for wall in pocket]
+        return front_only(scan_of(segments=local))
+    nav = Navigator(NavigatorSettings(stuck_timeout=1.0, give_up_timeout=30.0), (-1.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
+    t, pose = 0.0, (-1.0, 0.0, 0.0)
+    for i in range(11):
+        t, pose = i * 0.1, (-1.0 + 0.1 * i, 0.0, 0.0)
+        nav.update(t, pose, 1.0, 0.0, scan_at(*pose), LASER, JACKAL)
+    steps = []
+    while len(steps) < 100 and (not steps or steps[-1].reason != 'turning to try the other side'):
+        t += 0.1
+        step = nav.update(t, pose, steps[-1].linear_x if steps else 0.0, 0.0, scan_at(*pose), LASER, JACKAL)
+        steps.append(step)
+        x, y, yaw = pose
+        pose = (x + step.linear_x * 0.1 * math.cos(yaw), y + step.linear_x * 0.1 * math.sin(yaw),
+                yaw + step.angular_z * 0.1)
+    backing = [st for st in steps if st.reason.startswith('backing out the way it came')]
+    assert backing and all(st.linear_x < 0.0 for st in backing)
+    assert abs(pose[1]) < 0.05                      # along the way it came
+    assert steps[-1].reason == 'turning to try the other side', [st.reason for st in steps]
+    # It turned once a turn in place kept the margin from the walls: its corners' circle clear of their ends.
+    corner = math.hypot(JACKAL.x_max, JACKAL.y_max)
+    assert math.hypot(pose[0] + 0.1, 0.3) >= corner + NavigatorSettings().safety_margin
+    assert pose[0] > -1.0 + 0.1                     # no farther back than it needed
+
+
 def test_backing_up_needs_a_scan_that_sees_behind():
     from closed_loop.control.navigator import rear_seen
     full = scan_of()

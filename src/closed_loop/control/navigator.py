@@ -1,9 +1,10 @@
 """The reactive navigator: its settings, and the states over the local planner (``closed_loop.control.local_planner``).
 
 GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (close the place just ahead to the way
-for a while, back up where the scan sees the rear clear, then turn toward the side not tried last time) comes
-after ``stuck_timeout`` without progress; REACHED within ``goal_tolerance`` of the goal; FAILED after
-``give_up_timeout`` without progress. With no goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
+for a while, back up where the scan sees the rear clear, back out along the way it came while it has no room
+to turn, then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
+REACHED within ``goal_tolerance`` of the goal; FAILED after ``give_up_timeout`` without progress. With no
+goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
 numbers. Free of ROS.
 """
 import dataclasses
@@ -16,8 +17,8 @@ from closed_loop.control.guard import (footprint_clearance, footprint_clearances
                                        scan_points)
 from closed_loop.control.local_planner import (PREDICTION_STEP_S, blind_mask, blind_points, check_finite, plan,
                                                predict, required_margin, step_toward)
-from closed_loop.control.scan import sample_angles
 from closed_loop.control.scan_memory import ScanMemory, from_frame, to_frame
+from closed_loop.control.trail import TRAIL_LOOKBACK_M, TRAIL_STEP_M, Trail, back_toward, rear_seen
 from closed_loop.control.loop import LoopSettings
 from closed_loop.settings import SettingsError, param
 
@@ -76,22 +77,6 @@ class GoalSettings:
                                  'start heading; 0: no goal, hold the start heading forever', minimum=0.0)
 
 
-#: Backing up needs the scan to see behind: rays within this of straight back (rad).
-REAR_HALF_ANGLE_RAD = math.radians(30.0)
-
-
-def rear_seen(scan, laser_pose):
-    """True if the scan has rays toward the whole rear sector (a 270-degree LIDAR facing forward has
-    none: then what is behind is unknown, and backing up is not safe)."""
-    angles = numpy.asarray(sample_angles(scan)) + laser_pose.yaw
-    off_back = numpy.abs(numpy.arctan2(numpy.sin(angles - math.pi), numpy.cos(angles - math.pi)))
-    covered = off_back <= REAR_HALF_ANGLE_RAD
-    if not covered.any():
-        return False
-    spacing = abs(scan.angle_increment)
-    return covered.sum() * spacing >= 2 * REAR_HALF_ANGLE_RAD - 2 * spacing
-
-
 def in_danger(sent, scan_points_xy, settings, footprint):
     """True if the command being followed (``sent``, m/s and rad/s) is no longer safe: its predicted path
     comes within ``safety_margin`` of the scan's points (robot frame). The node acts at once on such a
@@ -129,10 +114,14 @@ FINAL_TURN_GAIN = 1.5
 FINAL_TURN_RADPS = 1.0
 FINAL_SPEED_GAIN = 1.0
 FINAL_DRIVE_RAD = 0.5
-#: Recovery: back up at this speed for this long (if the rear is clear), then turn in place at this rate
-#: for this long toward the side not tried last time (if turning is safe).
+#: Recovery: back up at this speed for this long (if the scan sees the rear clear); while turning in place is
+#: not safe, back out along the way it came (``closed_loop.control.trail``, what the map says is clear) up to
+#: BACKOUT_M back and BACKOUT_S from the start; then turn in place at this rate for this long toward the side
+#: not tried last time (if turning is safe).
 BACKUP_SPEED_MPS = 0.15
 BACKUP_S = 1.0
+BACKOUT_M = 0.6
+BACKOUT_S = 8.0
 RECOVERY_TURN_RADPS = 0.8
 RECOVERY_TURN_S = 2.0
 #: After this long (s) without progress, where the window would stand or turn in place, the way is followed
@@ -175,8 +164,10 @@ class Navigator:
     heading (on a line beside the first one), and it never reaches anything; the way round keeps within
     ``hold_corridor`` of that line, so a wall across the whole way is a block it stops at, not a thing to
     go round. No progress toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (close the
-    place just ahead to the way for CLOSED_FOR_S, back up if the rear is clear, turn in place toward the
-    other side than last time if that is safe, then seek again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s, why)`` is called on every change.
+    place just ahead to the way for CLOSED_FOR_S, back up if the rear is clear, back out along the way it
+    came while turning in place is not safe, turn in place toward the other side than last time if that is
+    safe, then seek again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s,
+    why)`` is called on every change.
     """
 
     def __init__(self, settings, start_pose, goal_xy=None, on_transition=None):
@@ -203,6 +194,7 @@ class Navigator:
         self._stuck_from_s = now_s   # the last progress or the end of the last recovery (stuck_timeout)
         self._recovery = None
         self._closed = []            # places closed to the way: (x, y) in odom, until when (s)
+        self._trail = Trail()        # the way it came (odom), to back out along
         self._way = None             # the way followed, (N, 2) in odom, kept while it stays open (wavefront.way)
         self._command = None         # the first step is taken from the measured speed
         if self.state is not NavState.GOAL_SEEKING and now_s is not None:
@@ -272,12 +264,15 @@ class Navigator:
         if stalled >= s.give_up_timeout:
             self._enter(NavState.FAILED, now_s, 'no progress for %.1f s (give_up_timeout)' % stalled)
             return Step(self.state, 0.0, 0.0, 'failed')
+        if self.state is not NavState.RECOVERING:
+            self._trail.add(pose[0], pose[1])
         if self.state is NavState.RECOVERING:
             step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
         elif now_s - self._stuck_from_s >= s.stuck_timeout:
-            self._recovery = {'started_s': now_s, 'side': self._side}
+            self._recovery = {'started_s': now_s, 'side': self._side, 'turn_s': None,
+                              'end': self._trail.back(BACKOUT_M) if len(self._trail) > 1 else None}
             self._way = None
             self._side = -self._side
             self._closed.append(((pose[0] + CLOSED_AHEAD_M * math.cos(pose[2]),
@@ -363,15 +358,23 @@ class Navigator:
             clearance = path_clearance(points, footprint, poses)
             return ((clearance >= margin or clearance >= now_clear - 1e-3)
                     and bool((point_clearances(blind, footprint, poses) - doubt >= margin).all()))
-        if elapsed < BACKUP_S:
-            if rear_seen(scan, laser_pose) and safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
-                return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
-            self._recovery['started_s'] = now_s - BACKUP_S   # the rear is not clear: go on to the turn
-            elapsed = BACKUP_S
-        if elapsed < BACKUP_S + RECOVERY_TURN_S:
-            w = self._recovery['side'] * RECOVERY_TURN_RADPS
-            if safe(0.0, w, min(s.horizon, BACKUP_S + RECOVERY_TURN_S - elapsed)):
-                return Step(NavState.RECOVERING, 0.0, w, 'turning to try the other side')
+        r = self._recovery
+        turn = r['side'] * RECOVERY_TURN_RADPS
+        if r['turn_s'] is None:
+            end = r['end']
+            if elapsed < BACKUP_S and rear_seen(scan, laser_pose):
+                if safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
+                    return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
+            elif end is not None and elapsed < BACKOUT_S and math.hypot(end[0] - pose[0], end[1] - pose[1]) > \
+                    TRAIL_STEP_M and not safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S)):
+                self._trail.drop_behind(pose[0], pose[1])
+                v, w = back_toward(pose, self._trail.back(TRAIL_LOOKBACK_M), BACKUP_SPEED_MPS, s.max_yaw_rate)
+                if safe(v, w, BACKUP_S):
+                    return Step(NavState.RECOVERING, v, w, 'backing out the way it came: no room to turn here')
+            r['turn_s'] = now_s
+        if now_s - r['turn_s'] < RECOVERY_TURN_S and safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S -
+                                                                              (now_s - r['turn_s']))):
+            return Step(NavState.RECOVERING, 0.0, turn, 'turning to try the other side')
         self._recovery = None
         self._stuck_from_s = now_s
         self._enter(NavState.GOAL_SEEKING, now_s, 'recovery done')
