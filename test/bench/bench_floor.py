@@ -28,7 +28,7 @@ from closed_loop.sim.rig import Rig  # noqa: E402
 
 PROFILES = ('closed_loop', 'burger', 'jackal')
 BARN = {'generator': {'method': 'barn', 'seed': 2, 'fill': 0.45, 'smoothing': 2}}
-FLOOR_S, EPISODE_S, REPEATS = 20.0, 60.0, 3
+FLOOR_S, EPISODE_S, REPEATS = 10.0, 60.0, 3
 TARGET_RATIO, TARGET_SETUP_MS, TARGET_CLUTTER_SPEED = 1.5, 20.0, 40.0
 
 
@@ -37,18 +37,22 @@ def sim_params(profile):
 
 
 def floor_cpu_per_s(world, profile):
-    """CPU s per simulated s of stepping ``world`` (a World) with ``profile``'s robot, nothing else."""
-    rig = Rig(world, sim_params(profile), profile.urdf)
-    try:
-        steps = int(round(FLOOR_S / rig.sim.dt_s))
-        for _ in range(50):
-            rig.sim.step()
-        started = time.process_time()
-        for _ in range(steps):
-            rig.sim.step()
-        return (time.process_time() - started) / (steps * rig.sim.dt_s)
-    finally:
-        rig.close()
+    """CPU s per simulated s of stepping ``world`` (a World) with ``profile``'s robot at rest, nothing else
+    (least of REPEATS runs of FLOOR_S: a shared machine's slow moments do not count)."""
+    best = float('inf')
+    for _ in range(REPEATS):
+        rig = Rig(world, sim_params(profile), profile.urdf)
+        try:
+            steps = int(round(FLOOR_S / rig.sim.dt_s))
+            for _ in range(50):
+                rig.sim.step()
+            started = time.process_time()
+            for _ in range(steps):
+                rig.sim.step()
+            best = min(best, (time.process_time() - started) / (steps * rig.sim.dt_s))
+        finally:
+            rig.close()
+    return best
 
 
 class Commands(Tap):
