@@ -8,6 +8,7 @@ import pytest
 from closed_loop.sim import shapes
 from closed_loop.commands import validate_command
 from closed_loop.sim.planar_rays import PlanarRays
+from closed_loop.sim.profiles import load_profile
 from closed_loop.sim.rig import Rig
 from closed_loop.sim.sensors.lidar import Lidar, LidarSettings
 from closed_loop.settings import SettingsError
@@ -97,6 +98,36 @@ def scans(world, caster, samples=360, steps=400):
             if k % 20 == 0:
                 out.append(lidar.sample(rig.sim))
         return numpy.array(out)
+    finally:
+        rig.close()
+
+
+#: A mast on the package robot's back, up through its LIDAR's plane: rays toward it stop on the robot itself.
+MAST = ('<collision><origin xyz="-0.12 0 0.15" rpy="0 0 0"/><geometry><box size="0.04 0.04 0.3"/></geometry>'
+        '</collision>')
+
+
+@pytest.mark.parametrize('name, mast', [('closed_loop', False), ('burger', False), ('jackal', False),
+                                        ('closed_loop', True)])
+def test_the_rays_the_robots_own_body_stops_are_those_a_cast_finds(name, mast):
+    # The planar LIDAR finds them once: by a cast of every ray as far as the footprint's diagonal, or with no
+    # cast where no part of the robot comes within the height the rays span over that reach.
+    profile = load_profile(name)
+    urdf = profile.urdf.replace('<link name="base_link">', '<link name="base_link">' + MAST, 1) if mast \
+        else profile.urdf
+    rig = Rig(load_world(os.path.join(WORLDS, 'empty.yaml')),
+              dict(profile.node_params('sim'), camera=False, ray_caster='planar'), urdf)
+    try:
+        sim, lidar = rig.sim, rig.sensors[Lidar]
+        ranges = lidar.sample(sim)
+        pose = sim.link_pose(lidar.frame)
+        dirs = lidar._ray_dirs @ sim.rotation_matrix(pose.orientation).T
+        origin = numpy.asarray(pose.position)
+        uids, _ = sim.cast_rays(numpy.repeat(origin[None, :], len(dirs), axis=0), origin + dirs)
+        stopped = uids == sim.robot_id
+        assert stopped.any() == mast
+        assert (lidar._own_body == stopped).all()
+        assert numpy.isinf(ranges[stopped]).all() and (ranges[stopped] > 0).all()
     finally:
         rig.close()
 

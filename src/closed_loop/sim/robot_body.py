@@ -118,6 +118,16 @@ class Robot:
         """:meth:`Simulation.cast_rays` for this robot's sensors: its own LIDAR housing is left out."""
         return self.sim.cast_rays_masked(ray_from, ray_to, self.ray_mask)
 
+    def reaches_height(self, z_low, z_high):
+        """False if no part of this robot that its sensors' rays can hit (its LIDAR housing aside) comes between
+        the heights ``z_low`` and ``z_high`` (m), as its links' bounding boxes say; True if one may."""
+        housing = self._links.get(self.model.names.scan_frame)
+        for link in [-1] + [index for index in self._links.values() if index != housing]:
+            low, high = self._call(pybullet.getAABB, self.robot_id, link)
+            if low[2] <= z_high and high[2] >= z_low:
+                return True
+        return False
+
     # -- commands and stepping ----------------------------------------------------------------------
     def command(self, twist):
         """Follow a validated :class:`drive.VelocityCommand` from now until the watchdog expires."""
@@ -236,7 +246,7 @@ class RobotView:
 
     _ROBOT = ('model', 'settings', 'robot_id', 'odometry', 'watchdog', 'track_m', 'name', 'command',
               'wheel_velocities', 'wheel_joint_states', 'ground_truth', 'link_pose', 'commanded_twist',
-              'contacts_with_obstacles', 'within', 'cast_rays', 'clearance')
+              'contacts_with_obstacles', 'within', 'cast_rays', 'reaches_height', 'clearance')
 
     def __init__(self, sim, robot):
         self._sim = sim

@@ -236,6 +236,7 @@ class Simulation:
     within = _first_robot('within')
     clearance = _first_robot('clearance')
     cast_rays = _first_robot('cast_rays')
+    reaches_height = _first_robot('reaches_height')
 
     # -- stepping -----------------------------------------------------------------------------------------
     def step(self):

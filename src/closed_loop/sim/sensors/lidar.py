@@ -104,11 +104,16 @@ class Lidar(Sensor):
         dirs = self._ray_dirs @ rotation.T
         origin = np.asarray(pose.position)
         if self._planar is not None and self._own_body is None:
-            # The robot's own body is within its footprint's diagonal of the LIDAR: no need to cast farther.
+            # The robot's own body is within its footprint's diagonal of the LIDAR: no need to cast farther; and
+            # none of it where no ray can be within that reach (a LIDAR above the body): no need to cast at all.
             fp = sim.model.footprint
             reach = min(s.range_max, math.hypot(fp.length_m, fp.width_m) + OWN_BODY_SLACK_M)
-            uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * reach)
-            self._own_body = uids == sim.robot_id
+            rise = reach * float(np.abs(dirs[:, 2]).max())
+            if sim.reaches_height(origin[2] - rise, origin[2] + rise):
+                uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * reach)
+                self._own_body = uids == sim.robot_id
+            else:
+                self._own_body = np.zeros(len(dirs), bool)
         if self._planar is not None and max(abs(rotation[2, 0]), abs(rotation[2, 1])) <= PLANAR_TILT_LIMIT:
             centres = None if not sim.has_moving_obstacles else [position for _, position in sim.obstacle_positions()]
             fan = (math.atan2(dirs[0, 1], dirs[0, 0]), self.layout.angle_increment) \
