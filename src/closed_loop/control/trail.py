@@ -35,9 +35,6 @@ class Trail:
     def __len__(self):
         return len(self._points)
 
-    def clear(self):
-        self._points = []
-
     def add(self, x, y):
         """The robot is at (x, y) (odom, m): a new point once it is TRAIL_STEP_M from the newest."""
         if not self._points or math.hypot(x - self._points[-1][0], y - self._points[-1][1]) >= TRAIL_STEP_M - 1e-9:
@@ -59,7 +56,7 @@ class Trail:
         return self._points[0]
 
     def drop_behind(self, x, y):
-        """Forget the points from the nearest to (x, y) on (backing out goes back over them)."""
+        """Forget the points newer than the one nearest (x, y) (backing out has gone back over them)."""
         if self._points:
             points = numpy.asarray(self._points)
             nearest = int(numpy.argmin(numpy.hypot(points[:, 0] - x, points[:, 1] - y)))
