@@ -10,8 +10,8 @@ from std_msgs.msg import String
 
 from closed_loop.watchdog import SilenceWatchdog
 from closed_loop.control.guard import GuardSettings, GuardVerdict, filter_command, scan_points, scan_problem
-from closed_loop.nodes.common import (LiveSettings, StopsOnShutdown, frame_id, init_node, load_settings,
-                                      robot_geometry)
+from closed_loop.nodes.common import (LiveSettings, Publisher, StopsOnShutdown, frame_id, init_node,
+                                      load_settings, robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.control.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -56,8 +56,8 @@ class CmdVelGuard(StopsOnShutdown):
         self._sent = (0.0, 0.0)
         self._verdict = None
         self._closing = False
-        self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
-        self.verdict_pub = rospy.Publisher('~verdict', String, queue_size=1, latch=True)
+        self.cmd_pub = Publisher('cmd_vel', Twist, queue_size=1)
+        self.verdict_pub = Publisher('~verdict', String, queue_size=1, latch=True)
         self._scan_source = SourceCheck(rospy.resolve_name('scan'), frame_id(s.scan_frame))
         self._cmd_source = SourceCheck(rospy.resolve_name('cmd_vel_in'))
         self._watchdog = SilenceWatchdog(s.scan_timeout, 1.0 / s.rate_hz, self._on_silence)

@@ -9,7 +9,7 @@ from std_msgs.msg import ColorRGBA, Float32, String
 from visualization_msgs.msg import Marker
 
 from closed_loop.control import markers
-from closed_loop.nodes.common import frame_id, init_node, load_settings
+from closed_loop.nodes.common import Publisher, frame_id, init_node, load_settings
 
 ARROW_SHAFT_M = 0.04
 ARROW_HEAD_M = 0.08
@@ -43,8 +43,8 @@ class CmdVelMarker:
         self._zone = None
         self._mode = None
         self._distance = None
-        self._arrow_pub = rospy.Publisher('cmd_vel_marker', Marker, queue_size=2)
-        self._text_pub = rospy.Publisher('obstacle_distance_marker', Marker, queue_size=2)
+        self._arrow_pub = Publisher('cmd_vel_marker', Marker, queue_size=2)
+        self._text_pub = Publisher('obstacle_distance_marker', Marker, queue_size=2)
         rospy.Subscriber('cmd_vel', Twist, self._on_cmd, queue_size=5)
         rospy.Subscriber('mode', String, self._on_mode, queue_size=5)
         rospy.Subscriber('obstacle_distance', Float32, self._on_distance, queue_size=5)

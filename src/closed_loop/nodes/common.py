@@ -50,6 +50,21 @@ def init_node(name, **kwargs):
     rospy.init_node(name, **kwargs)
 
 
+class Publisher(rospy.Publisher):
+    """``rospy.Publisher``, quiet once the node is shutting down. rospy closes a node's topics in a
+    pre-shutdown hook, before ``rospy.is_shutdown()`` turns true, so a callback that publishes in that window
+    (a scan arriving as roslaunch stops the graph) would end in "bad callback ... topic was closed during
+    publish()" in the log. A publish that fails while shutdown has been asked for is dropped; any other
+    failure is raised."""
+
+    def publish(self, *args, **kwargs):
+        try:
+            super().publish(*args, **kwargs)
+        except rospy.ROSException:
+            if not (rospy.is_shutdown() or rospy.core.is_shutdown_requested()):
+                raise
+
+
 def join_launch(name, launch, wait_s):
     """Join, as an anonymous node without signal handlers, the graph that ``launch`` (the subprocess.Popen
     of a roslaunch) brings up. True once joined; False if no master came within ``wait_s`` s or the launch

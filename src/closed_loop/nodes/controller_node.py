@@ -19,8 +19,8 @@ from closed_loop import robot_model
 from closed_loop.commands import CommandError
 from closed_loop.controllers import STOP, Context, ControllerError, Log, Odom, controller_class
 from closed_loop.geometry import Pose2D, quaternion_yaw
-from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, StopsOnShutdown, frame_id, goal_param,
-                                      init_node, load_settings, robot_geometry, stamp_to_sec)
+from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, Publisher, StopsOnShutdown, frame_id,
+                                      goal_param, init_node, load_settings, robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
 from closed_loop.nodes.drawing_messages import PUBLICATIONS, to_message
 from closed_loop.sources import SourceCheck
@@ -88,12 +88,12 @@ class ControllerNode(StopsOnShutdown):
         self._scan_seen = False
         self._started_wall = time.monotonic()
         self.core = cls(self.settings, self._context(goal), *extras)
-        self.cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
-        self._mode_pub = rospy.Publisher('~mode', String, queue_size=1, latch=True)
+        self.cmd_pub = Publisher('cmd_vel', Twist, queue_size=1)
+        self._mode_pub = Publisher('~mode', String, queue_size=1, latch=True)
         self._outputs = {}
         for name, kind in cls.outputs.items():
             msg_type, latched = PUBLICATIONS[kind]
-            self._outputs[name] = (rospy.Publisher('~' + name, msg_type, queue_size=1, latch=latched), latched)
+            self._outputs[name] = (Publisher('~' + name, msg_type, queue_size=1, latch=latched), latched)
         self._report()
         self._source = SourceCheck(rospy.resolve_name('scan'), frame_id(self.settings.scan_frame))
         self._watchdog = SilenceWatchdog(self.settings.scan_timeout, self.settings.watchdog_period_s,

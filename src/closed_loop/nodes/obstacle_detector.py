@@ -5,7 +5,7 @@ import rospy
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float32
 
-from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, init_node, load_settings
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, Publisher, init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
 from closed_loop.control.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
@@ -42,8 +42,8 @@ class ObstacleDetector:
 
     def __init__(self):
         self._settings = load_settings(DetectorSettings)
-        self._nearest_pub = rospy.Publisher('obstacle_distance', Float32, queue_size=SCAN_QUEUE_SIZE)
-        self._sector_pubs = {name: rospy.Publisher('obstacle_distance/' + name, Float32,
+        self._nearest_pub = Publisher('obstacle_distance', Float32, queue_size=SCAN_QUEUE_SIZE)
+        self._sector_pubs = {name: Publisher('obstacle_distance/' + name, Float32,
                                                    queue_size=SCAN_QUEUE_SIZE)
                              for name in SECTOR_CENTRES_RAD}
         # Sectors turn with the laser's mounting on the robot (robot_description), per scan frame.

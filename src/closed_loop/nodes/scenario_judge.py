@@ -14,7 +14,7 @@ from std_msgs.msg import Float32, String, UInt32
 
 from closed_loop.batch.judge import Judge, JudgeSettings, StartSettings
 from closed_loop.geometry import quaternion_yaw
-from closed_loop.nodes.common import goal_param, init_node, load_settings, stamp_to_sec
+from closed_loop.nodes.common import Publisher, goal_param, init_node, load_settings, stamp_to_sec
 from closed_loop.sim.simulation import SimSettings
 
 #: A command older than this (s, simulated) is no longer the base's: its watchdog has braked it to zero.
@@ -49,7 +49,7 @@ class ScenarioJudge:
         self.contact_count = 0
         self.mode = None
         self.done = False
-        self.verdict_pub = rospy.Publisher('~verdict', String, queue_size=1, latch=True)
+        self.verdict_pub = Publisher('~verdict', String, queue_size=1, latch=True)
         rospy.Subscriber('contact_count', UInt32, self._on_contacts, queue_size=10)
         rospy.Subscriber('clearance', Float32, self._on_clearance, queue_size=10)
         rospy.Subscriber('cmd_vel', Twist, self._on_command, queue_size=10)

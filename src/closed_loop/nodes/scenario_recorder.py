@@ -26,7 +26,7 @@ from rosgraph_msgs.msg import Clock
 from std_msgs.msg import Bool
 
 from closed_loop import recording
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import Publisher, init_node, load_settings
 
 #: How often the graph is looked at for new topics, and the free space checked (s, wall clock).
 POLL_S, ROOM_CHECK_PERIOD_S = 0.05, 2.0
@@ -94,7 +94,7 @@ class ScenarioRecorder:
         if self.ready is None and '/clock' in self.subscribers and all(
                 sub.get_num_connections() > 0 for sub in self.subscribers.values()):
             rospy.loginfo('recording %d topics into %s', len(self.subscribers), self.path)
-            self.ready = rospy.Publisher('~recording', Bool, queue_size=1, latch=True)
+            self.ready = Publisher('~recording', Bool, queue_size=1, latch=True)
             self.ready.publish(Bool(data=True))
 
     def run(self):

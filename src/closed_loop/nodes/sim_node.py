@@ -19,7 +19,7 @@ from visualization_msgs.msg import MarkerArray
 from closed_loop.sim import drive, world as world_mod
 from closed_loop import robot_model
 from closed_loop.nodes import sensor_messages as to_msgs
-from closed_loop.nodes.common import LOG_PERIOD_S, init_node, load_settings
+from closed_loop.nodes.common import LOG_PERIOD_S, Publisher, init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
 from closed_loop.sim.scheduler import Schedule, SchedulingSettings
 from closed_loop.sim.sensors.camera import Camera
@@ -95,7 +95,7 @@ class RobotPort:
                 continue
             self.sensors.append((line, sensor))
             for topic, msg_type, queue, latched in line.publications:
-                self.publishers[topic] = rospy.Publisher(self.topic(topic, line.shared), msg_type,
+                self.publishers[topic] = Publisher(self.topic(topic, line.shared), msg_type,
                                                          queue_size=queue, latch=latched)
         self._lock = threading.Lock()
         self._pending_command = None
@@ -231,7 +231,7 @@ class SimNode:
         if self._paused:
             rospy.loginfo('sim_node: paused at t = 0 until ~unpause_physics')
         self._stopped = threading.Event()
-        self.clock_pub = rospy.Publisher('/clock', Clock, queue_size=10)
+        self.clock_pub = Publisher('/clock', Clock, queue_size=10)
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))
         rospy.Service('~pause_physics', Empty, lambda _: self._request('pause'))
         rospy.Service('~unpause_physics', Empty, lambda _: self._request('unpause'))

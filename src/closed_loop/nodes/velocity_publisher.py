@@ -6,7 +6,7 @@ from geometry_msgs.msg import Twist
 from std_srvs.srv import Trigger, TriggerResponse
 
 from closed_loop.commands import STOP, PublisherSettings, command_for
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import Publisher, init_node, load_settings
 from closed_loop.nodes.conversions import twist_from_command
 
 # How often the steady "Publishing: ..." line may repeat in the log (s).
@@ -35,7 +35,7 @@ class VelocityPublisher:
         self._lock = threading.Lock()
         self._stopped = False
         self._closing = False
-        self._cmd_pub = rospy.Publisher('cmd_vel', Twist, queue_size=1)
+        self._cmd_pub = Publisher('cmd_vel', Twist, queue_size=1)
         self._stop_srv = rospy.Service('~stop', Trigger, self._on_stop)
         self._resume_srv = rospy.Service('~resume', Trigger, self._on_resume)
         # reset=True: a ROS clock that jumps back (sim restart) restarts the timer instead of

@@ -5,7 +5,7 @@ from sensor_msgs.msg import Image
 from std_msgs.msg import Bool, UInt32
 
 from closed_loop.image_encoding import ImageEncodingError, array_to_image, image_to_array
-from closed_loop.nodes.common import init_node, load_settings
+from closed_loop.nodes.common import Publisher, init_node, load_settings
 from closed_loop.control.vision import SUPPORTED_ENCODINGS, VisionError, VisionSettings, detect_red_encoded
 
 #: Socket buffer of the image subscription. rospy's 64 KiB default holds less than one camera
@@ -49,11 +49,11 @@ class VisionNode(object):
 
     def __init__(self):
         self._settings = load_settings(VisionSettings)
-        self._detected_pub = rospy.Publisher('red_detected', Bool, queue_size=RESULT_QUEUE_SIZE)
-        self._centroid_pub = rospy.Publisher('red_centroid', PointStamped,
+        self._detected_pub = Publisher('red_detected', Bool, queue_size=RESULT_QUEUE_SIZE)
+        self._centroid_pub = Publisher('red_centroid', PointStamped,
                                              queue_size=RESULT_QUEUE_SIZE)
-        self._area_pub = rospy.Publisher('red_area', UInt32, queue_size=RESULT_QUEUE_SIZE)
-        self._mask_pub = rospy.Publisher('~debug_mask', Image, queue_size=IMAGE_QUEUE_SIZE)
+        self._area_pub = Publisher('red_area', UInt32, queue_size=RESULT_QUEUE_SIZE)
+        self._mask_pub = Publisher('~debug_mask', Image, queue_size=IMAGE_QUEUE_SIZE)
         self._image_sub = rospy.Subscriber('camera/image_raw', Image, self._on_image,
                                            queue_size=IMAGE_QUEUE_SIZE,
                                            buff_size=IMAGE_BUFFER_BYTES)
