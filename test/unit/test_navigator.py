@@ -339,6 +339,28 @@ def test_a_robot_with_no_room_to_turn_backs_out_the_way_it_came_then_turns():
     assert pose[0] > -1.0 + 0.1                     # no farther back than it needed
 
 
+def test_a_robot_with_no_room_to_turn_and_no_trail_backs_straight_out_then_turns():
+    # The Jackal starts in the same pocket (no way it came to back out along) and cannot turn in it: it backs
+    # straight out, each move checked against the scan and what it remembers, until a turn in place keeps the
+    # margin, and then turns (before, it stood there until it gave up).
+    pocket = [((-0.1, 0.3), (0.4, 0.3)), ((-0.1, -0.3), (0.4, -0.3)), ((0.4, -0.3), (0.4, 0.3))]
+    nav = Navigator(NavigatorSettings(stuck_timeout=1.0, give_up_timeout=30.0), (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0))
+    t, pose, steps = 0.0, (0.0, 0.0, 0.0), []
+    while len(steps) < 100 and (not steps or steps[-1].reason != 'turning to try the other side'):
+        t += 0.1
+        x, y, yaw = pose
+        scan = front_only(scan_of(segments=[((ax - x, ay - y), (bx - x, by - y)) for (ax, ay), (bx, by) in pocket]))
+        step = nav.update(t, pose, steps[-1].linear_x if steps else 0.0, 0.0, scan, LASER, JACKAL)
+        steps.append(step)
+        pose = (x + step.linear_x * 0.1 * math.cos(yaw), y, yaw + step.angular_z * 0.1)
+    reasons = [st.reason for st in steps]
+    assert 'backing straight out: no room to turn here' in reasons, reasons
+    assert reasons[-1] == 'turning to try the other side', reasons
+    corner = math.hypot(JACKAL.x_max, JACKAL.y_max)
+    assert math.hypot(pose[0] + 0.1, 0.3) >= corner + NavigatorSettings().safety_margin
+    assert pose[0] > -0.8                           # no farther back than it needed
+
+
 def test_backing_up_needs_a_scan_that_sees_behind():
     from closed_loop.control.navigator import rear_seen
     full = scan_of()

@@ -1,8 +1,8 @@
 """The reactive navigator: its settings, and the states over the local planner (``closed_loop.control.local_planner``).
 
 GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (close the place just ahead to the way
-for a while, back up where the scan sees the rear clear, back out along the way it came while it has no room
-to turn, then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
+for a while, back up where the scan sees the rear clear, back out while it has no room to turn (along the way it
+came, else straight or on an arc), then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
 REACHED within ``goal_tolerance`` of the goal; FAILED after ``give_up_timeout`` without progress. With no
 goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
 numbers. Free of ROS.
@@ -115,13 +115,17 @@ FINAL_TURN_RADPS = 1.0
 FINAL_SPEED_GAIN = 1.0
 FINAL_DRIVE_RAD = 0.5
 #: Recovery: back up at this speed for this long (if the scan sees the rear clear); while turning in place is
-#: not safe, back out along the way it came (``closed_loop.control.trail``, what the map says is clear) up to
-#: BACKOUT_M back and BACKOUT_S from the start; then turn in place at this rate for this long toward the side
+#: not safe, back out along the way it came (``closed_loop.control.trail``, what the map says is clear), or
+#: where that move is not safe or there is no trail, straight back or on a backing arc (each move checked
+#: against the scan and what it remembers), up to BACKOUT_M from where the recovery began and BACKOUT_S from
+#: its start; then turn in place at this rate for this long toward the side
 #: not tried last time (if turning is safe).
 BACKUP_SPEED_MPS = 0.15
 BACKUP_S = 1.0
 BACKOUT_M = 0.6
 BACKOUT_S = 8.0
+#: Where neither the way it came nor straight back keeps the margin, a backing arc at this turn rate (rad/s).
+BACKING_ARC_RADPS = 0.4
 RECOVERY_TURN_RADPS = 0.8
 RECOVERY_TURN_S = 2.0
 #: After this long (s) without progress, where the window would stand or turn in place, the way is followed
@@ -164,8 +168,8 @@ class Navigator:
     heading (on a line beside the first one), and it never reaches anything; the way round keeps within
     ``hold_corridor`` of that line, so a wall across the whole way is a block it stops at, not a thing to
     go round. No progress toward the goal (or along the line) for ``stuck_timeout``: RECOVERING (close the
-    place just ahead to the way for CLOSED_FOR_S, back up if the rear is clear, back out along the way it
-    came while turning in place is not safe, turn in place toward the other side than last time if that is
+    place just ahead to the way for CLOSED_FOR_S, back up if the rear is clear, back out (along the way it
+    came, else straight or on an arc) while turning in place is not safe, turn in place toward the other side than last time if that is
     safe, then seek again); none for ``give_up_timeout``: FAILED (zero). ``on_transition(old, new, now_s,
     why)`` is called on every change.
     """
@@ -271,7 +275,7 @@ class Navigator:
             if step is not None:
                 return step
         elif now_s - self._stuck_from_s >= s.stuck_timeout:
-            self._recovery = {'started_s': now_s, 'side': self._side, 'turn_s': None,
+            self._recovery = {'started_s': now_s, 'side': self._side, 'turn_s': None, 'from': pose[:2],
                               'end': self._trail.back(BACKOUT_M) if len(self._trail) > 1 else None}
             self._way = None
             self._side = -self._side
@@ -365,12 +369,19 @@ class Navigator:
             if elapsed < BACKUP_S and rear_seen(scan, laser_pose):
                 if safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
                     return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
-            elif end is not None and elapsed < BACKOUT_S and math.hypot(end[0] - pose[0], end[1] - pose[1]) > \
-                    TRAIL_STEP_M and not safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S)):
-                self._trail.drop_behind(pose[0], pose[1])
-                v, w = back_toward(pose, self._trail.back(TRAIL_LOOKBACK_M), BACKUP_SPEED_MPS, s.max_yaw_rate)
-                if safe(v, w, BACKUP_S):
-                    return Step(NavState.RECOVERING, v, w, 'backing out the way it came: no room to turn here')
+            elif elapsed < BACKOUT_S and math.hypot(r['from'][0] - pose[0], r['from'][1] - pose[1]) < BACKOUT_M \
+                    and not safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S)):
+                # No room to turn: back out the way it came, or else straight back or on a backing arc.
+                moves = [(-BACKUP_SPEED_MPS, 0.0, 'backing straight out')] + [
+                    (-BACKUP_SPEED_MPS, side * BACKING_ARC_RADPS, 'backing out on an arc')
+                    for side in (r['side'], -r['side'])]
+                if end is not None and math.hypot(end[0] - pose[0], end[1] - pose[1]) > TRAIL_STEP_M:
+                    self._trail.drop_behind(pose[0], pose[1])
+                    moves.insert(0, back_toward(pose, self._trail.back(TRAIL_LOOKBACK_M), BACKUP_SPEED_MPS,
+                                                s.max_yaw_rate) + ('backing out the way it came',))
+                for v, w, what in moves:
+                    if safe(v, w, BACKUP_S):
+                        return Step(NavState.RECOVERING, v, w, what + ': no room to turn here')
             r['turn_s'] = now_s
         if now_s - r['turn_s'] < RECOVERY_TURN_S and safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S -
                                                                               (now_s - r['turn_s']))):
