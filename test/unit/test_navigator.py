@@ -361,6 +361,21 @@ def test_a_robot_with_no_room_to_turn_and_no_trail_backs_straight_out_then_turns
     assert pose[0] > -0.8                           # no farther back than it needed
 
 
+def test_a_recovery_with_no_move_that_keeps_the_margin_says_so():
+    # A box 0.05 m round the Jackal, seen all round: no turn and no backing keeps the margin, so the
+    # recovery ends at once, and its transition says why (a run that stands there is read from its log).
+    box = [((-0.3, -0.26), (0.3, -0.26)), ((0.3, -0.26), (0.3, 0.26)), ((0.3, 0.26), (-0.3, 0.26)),
+           ((-0.3, 0.26), (-0.3, -0.26))]
+    why = []
+    nav = Navigator(NavigatorSettings(stuck_timeout=1.0), (0.0, 0.0, 0.0), goal_xy=(10.0, 0.0),
+                    on_transition=lambda old, new, now_s, reason: why.append((new, reason)))
+    steps = [nav.update(i * 0.1, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(segments=box), LASER, JACKAL)
+             for i in range(25)]
+    assert all((st.linear_x, st.angular_z) == (0.0, 0.0) for st in steps)
+    assert (NavState.GOAL_SEEKING, 'recovery done: no move kept the margin (no room to turn or to back out)') \
+        in why, why
+
+
 def test_backing_up_needs_a_scan_that_sees_behind():
     from closed_loop.control.navigator import rear_seen
     full = scan_of()

@@ -388,7 +388,8 @@ class Navigator:
             return Step(NavState.RECOVERING, 0.0, turn, 'turning to try the other side')
         self._recovery = None
         self._stuck_from_s = now_s
-        self._enter(NavState.GOAL_SEEKING, now_s, 'recovery done')
+        self._enter(NavState.GOAL_SEEKING, now_s, 'recovery done' if elapsed > 0.0 else
+                    'recovery done: no move kept the margin (no room to turn or to back out)')
         return None
 
     def _enter(self, state, now_s, why):
