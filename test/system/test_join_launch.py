@@ -19,7 +19,10 @@ CHILD = textwrap.dedent('''
     launch.send_signal(signal.SIGINT)
     launch.wait(30)
     rospy.Subscriber('/anything', String, lambda m: None)
-    print('joined %s; subscribed after the launch ended; shut down: %s' % (joined, rospy.is_shutdown()))
+    # Shut-down asked for: rospy.is_shutdown() turns true only once its shut-down hooks have run, in the
+    # watcher's thread, which may be a moment after the subscription returned.
+    print('joined %s; subscribed after the launch ended; shut down: %s'
+          % (joined, rospy.core.is_shutdown_requested()))
 ''')
 
 
