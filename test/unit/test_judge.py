@@ -33,6 +33,29 @@ def test_a_robot_at_rest_for_the_hold_is_stopped_from_when_it_came_to_rest():
     assert verdict.path_m == pytest.approx(1.0) and verdict.commands == 21
 
 
+def test_a_robot_rocking_where_it_came_to_rest_is_at_rest_and_one_that_moves_off_is_not():
+    # Under a zero command, after coming to rest at x = 1: rocking on its wheels (speed and yaw rate swinging
+    # past rest_speed and rest_yaw_rate, 1 mm back and forth) is at rest, and the scenario ends as stopped from
+    # when it came to rest; drifting 2 cm off it is not (it times out), nor is a yaw rate over
+    # rest_rock_yaw_rate.
+    def run(rock, drift_mps=0.0, yaw_rate=0.06):
+        judge, t, rows = Judge(JudgeSettings(rest_hold=1.0, time_limit=6.0)), 0.0, []
+        for i in range(80):
+            x = 0.1 * min(i, 10) + drift_mps * 0.1 * max(i - 11, 0) + (0.001 * (-1) ** i if rock and i > 11 else 0.0)
+            speed = 0.5 if i < 10 else (0.0 if i == 11 or not rock else 0.01 * (-1) ** i)
+            w = 0.0 if i <= 11 or not rock else yaw_rate * (-1) ** i
+            command = (0.5, 0.0) if i < 10 else (0.0, 0.0)
+            judge.on_command()
+            if judge.due(t) and judge.observe(t, x, 0.0, 0.0, speed, w, command, None):
+                break
+            t += 0.1
+        return judge.verdict(t)
+    rocking = run(True)
+    assert rocking.outcome == 'stopped' and rocking.time_s == pytest.approx(1.1)
+    assert run(True, drift_mps=0.02).outcome == 'timed_out'
+    assert run(True, yaw_rate=0.2).outcome == 'timed_out'
+
+
 def test_a_zero_command_is_needed_for_rest_and_no_command_counts_as_zero():
     creeping = drive(Judge(JudgeSettings(time_limit=3.0)), [(0.0, 0.0, (0.1, 0.0), None)] * 40)
     assert creeping.outcome == 'timed_out'

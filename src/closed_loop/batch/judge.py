@@ -8,7 +8,10 @@ shapes and any obstacle. It says when the scenario is over (:attr:`Judge.ended`)
 :class:`Verdict`.
 
 The rules. The robot is *at rest* when its speed and yaw rate are under ``rest_speed`` and
-``rest_yaw_rate`` and the command is zero (no command counts as zero: the base brakes without one). The
+``rest_yaw_rate`` and the command is zero (no command counts as zero: the base brakes without one); it
+stays at rest while the command stays zero, it keeps within ``rest_speed`` x ``rest_hold`` (m) of where it
+came to rest and its yaw rate stays under ``rest_rock_yaw_rate`` (a base held at zero rocks on its wheels
+and creeps round a few hundredths of a radian without going anywhere). The
 scenario ends: at the first contact, with ``end_on_contact``; when the controller says REACHED or FAILED
 and the robot is at rest; when it has been at rest for ``rest_hold`` within ``success_radius`` of the
 goal; when it has been at rest for ``rest_hold`` anywhere, with ``end_at_rest`` (a controller that stops
@@ -39,6 +42,10 @@ class JudgeSettings:
                               'rest_yaw_rate, under a zero command)', minimum=0.0, exclusive_minimum=True)
     rest_yaw_rate: float = param(0.01, 'rad/s', 'at rest: ground-truth yaw rate under this', minimum=0.0,
                                  exclusive_minimum=True)
+    rest_rock_yaw_rate: float = param(0.1, 'rad/s', 'once at rest, it stays at rest while the command stays zero, '
+                                      'its yaw rate stays under this and it keeps within rest_speed x rest_hold '
+                                      'of where it came to rest (a base held at zero rocks on its wheels)',
+                                      minimum=0.0)
     rest_hold: float = param(1.0, 's', 'at rest this long ends the scenario (see end_at_rest)', minimum=0.0)
     first_command_wait: float = param(3.0, 's', 'a robot no command has reached yet is not judged at rest before '
                                       "this simulated time (a graph's controller may answer its first scan late "
@@ -141,6 +148,7 @@ class Judge:
         self._last = None            # (t, x, y, speed) of the last observation
         self._pose = None
         self._rest_since = None
+        self._rest_pose = None       # (x, y) where it came to rest, while it is at rest
         self._rest_end = False       # ended by resting (not by time or contact)
 
     def due(self, t_s):
@@ -186,7 +194,9 @@ class Judge:
             v, w = command if command is not None else (0.0, 0.0)
             self.track.append((t_s, x, y, yaw, speed, v, w, mode, self._clearance_now))
         zero = command is None or (command[0] == 0.0 and command[1] == 0.0)
-        at_rest = abs(speed) < s.rest_speed and abs(yaw_rate) < s.rest_yaw_rate and zero
+        at_rest = zero and (abs(speed) < s.rest_speed and abs(yaw_rate) < s.rest_yaw_rate
+                            or self._held(x, y, yaw_rate))
+        self._rest_pose = (self._rest_pose or (x, y)) if at_rest else None
         self._rest_since = (self._rest_since if self._rest_since is not None else t_s) if at_rest else None
         error = self.goal_error(x, y)
         near_goal = error is not None and error <= s.success_radius
@@ -201,6 +211,15 @@ class Judge:
         elif t_s >= s.time_limit - 1e-9:
             self._end(t_s)
         return self.ended
+
+    def _held(self, x, y, yaw_rate):
+        """True if the robot, at rest before, still is (near where it came to rest, rocking at most)."""
+        if self._rest_pose is None:
+            return False
+        x0, y0 = self._rest_pose
+        hold = self.settings.rest_hold
+        return (math.hypot(x - x0, y - y0) < self.settings.rest_speed * hold
+                and abs(yaw_rate) < self.settings.rest_rock_yaw_rate)
 
     def _end(self, t_s):
         self.ended, self.ended_s = True, t_s
