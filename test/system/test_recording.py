@@ -2,6 +2,7 @@
 are just characters), and a recorder that cannot write ends the run with a message naming the folder."""
 import glob
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -106,3 +107,54 @@ def test_demo_recording_holds_the_mode_and_the_stop_is_logged_once(tmp_path):
     assert log.count('-> STOP: obstacle') == 1, [line for line in log.splitlines() if 'STOP' in line]
     at_wall = log[log.index('-> STOP: obstacle'):]
     assert 'stopped:' not in at_wall, [line for line in at_wall.splitlines() if 'stopped:' in line]
+
+
+def node_pid(env, name, deadline_s=60.0):
+    """The pid of a node of the graph, asked of the node itself (its XML-RPC API, on loopback)."""
+    import rosgraph
+    import xmlrpc.client
+    master = rosgraph.Master('/test_recording', master_uri=env['ROS_MASTER_URI'])
+    end = time.monotonic() + deadline_s
+    while True:
+        try:
+            return xmlrpc.client.ServerProxy(master.lookupNode(name)).getPid('/test_recording')[2]
+        except (rosgraph.MasterException, OSError):
+            if time.monotonic() > end:
+                raise
+            time.sleep(0.2)
+
+
+def test_a_scenario_recorder_held_back_keeps_every_clock_message(tmp_path):
+    # A loaded machine makes the recorder read several /clock messages at once; rospy's own subscription to
+    # /clock (simulated time) asks for the last one only. Holding the recorder still does the same.
+    bag_path, verdict = tmp_path / 'scenario.bag', tmp_path / 'verdict.json'
+    port = free_port()
+    env = ros_env(tmp_path, port)
+    launch = subprocess.Popen(['roslaunch', '-p', str(port), 'closed_loop', 'scenario.launch', 'world:=wall',
+                               'controller_pkg:=closed_loop', 'controller_type:=stop_on_obstacle',
+                               'controller_name:=stop_on_obstacle', 'time_limit:=8', 'end_at_rest:=false',
+                               'verdict_file:=%s' % verdict, 'bag:=%s' % bag_path],
+                              env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        wait_master(port, launch)
+        pid = node_pid(env, '/scenario_recorder')
+        deadline = time.monotonic() + 90
+        while not (tmp_path / 'scenario.bag.part').exists() or os.path.getsize(tmp_path / 'scenario.bag.part') < 50000:
+            assert time.monotonic() < deadline and launch.poll() is None, 'the scenario did not start'
+            time.sleep(0.1)
+        os.kill(pid, signal.SIGSTOP)
+        time.sleep(1.5)
+        os.kill(pid, signal.SIGCONT)
+        while not verdict.exists():
+            assert time.monotonic() < deadline + 60 and launch.poll() is None, 'no verdict'
+            time.sleep(0.2)
+    finally:
+        stop(launch)
+    out = launch.stdout.read().decode(errors='replace')
+    assert bag_path.is_file(), out[-3000:]
+    with rosbag.Bag(str(bag_path)) as bag:
+        clock = [m.clock.to_sec() for _, m, _ in bag.read_messages('/clock')]
+    # The simulator sends every step's clock at real time; after a stall of its own it catches up without a
+    # burst, but always sends the clock before a scan (10 Hz). Held back 1.5 s, the recorder kept only the last.
+    gaps = [(a, b) for a, b in zip(clock, clock[1:]) if b - a > 0.15]
+    assert clock[0] <= 0.1 and clock[-1] >= 8.0 and not gaps, (clock[:3], clock[-3:], gaps[:5])

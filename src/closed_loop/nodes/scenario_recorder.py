@@ -42,6 +42,17 @@ class _Raw:
         self._md5sum = md5sum
 
 
+def keep_every(subscriber):
+    """Receive every message of ``subscriber``'s topic, not the last of each read.
+
+    On simulated time rospy subscribes to ``/clock`` itself with ``queue_size=1``, in the same subscription
+    as ours, and a connection keeps the queue size it was made with: a recorder slowed by a loaded machine
+    read several clock messages at once and kept only the last (a bag began at 0.06 s, not 0)."""
+    subscriber.impl.set_queue_size(-1)
+    for connection in list(subscriber.impl.connections):
+        connection.protocol.queue_size = None
+
+
 class ScenarioRecorder:
     """Records every topic of the graph into one bag; see the module."""
 
@@ -90,7 +101,9 @@ class ScenarioRecorder:
             return
         for topic, nodes in published:
             if topic not in self.subscribers and topic not in LEFT_OUT and set(nodes) - {me}:
-                self.subscribers[topic] = rospy.Subscriber(topic, rospy.AnyMsg, self.on_message, topic)
+                self.subscribers[topic] = sub = rospy.Subscriber(topic, rospy.AnyMsg, self.on_message, topic)
+                if topic == '/clock':
+                    keep_every(sub)
         if self.ready is None and '/clock' in self.subscribers and all(
                 sub.get_num_connections() > 0 for sub in self.subscribers.values()):
             rospy.loginfo('recording %d topics into %s', len(self.subscribers), self.path)
