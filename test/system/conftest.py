@@ -1,6 +1,7 @@
 """Fixtures of the system tests: real ROS processes (a master, nodes, roslaunch) on loopback, each test on
 its own free port, with logs in the test's temporary folder."""
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -17,10 +18,20 @@ MASTER_WAIT_S = 20.0
 
 
 def free_port():
-    """A TCP port free on 127.0.0.1 now."""
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
+    """A TCP port free on 127.0.0.1 now, below the kernel's ephemeral range: every node binds its own servers
+    to ephemeral ports, so one that tests run side by side start could take a number from that range between
+    this call and the master's bind (a test's watcher once waited 120 s on a node's port)."""
+    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
+        ephemeral_low = int(f.read().split()[0])
+    low = min(20000, ephemeral_low // 2)
+    while True:
+        port = random.randrange(low, ephemeral_low)
+        with socket.socket() as s:
+            try:
+                s.bind(('127.0.0.1', port))
+            except OSError:
+                continue
+            return port
 
 
 def ros_env(tmp_path, port, **extra):
@@ -63,14 +74,33 @@ def master_pid(port):
 
 
 def wait_master(port, process=None, timeout_s=MASTER_WAIT_S):
+    """Wait for a master on ``port``: one that answers as a master, and, given ``process``, its own."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        if master_up(port):
-            return
         if process is not None and process.poll() is not None:
             raise AssertionError('the launch ended before its master came up (exit %s)' % process.returncode)
+        pid = master_pid(port)
+        if pid is not None:
+            if process is not None and not _descends(pid, process.pid):
+                raise AssertionError('port %d: the master answering there (pid %d) is not this launch\'s'
+                                     % (port, pid))
+            return
         time.sleep(0.1)
     raise AssertionError('no master on port %d within %g s' % (port, timeout_s))
+
+
+def _descends(pid, ancestor):
+    """Whether process ``pid`` is ``ancestor`` or a child of its children (roslaunch starts the master as its
+    own child, in a session of its own)."""
+    while pid and pid > 1:
+        if pid == ancestor:
+            return True
+        try:
+            with open('/proc/%d/stat' % pid) as f:
+                pid = int(f.read().rsplit(')', 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            return False
+    return False
 
 
 def stop(process, sig=signal.SIGINT, timeout_s=20.0):
