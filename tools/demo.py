@@ -158,6 +158,14 @@ def launch_failure_lines(log_path, most=8):
     return lines[-most:]
 
 
+def report_early_end(launch, log_path):
+    """Say that the launch ended before the run did, and why; the demo's exit status (1)."""
+    print('\ndemo: the launch ended early (roslaunch exit code %s); see %s' % (launch.returncode, log_path))
+    for line in launch_failure_lines(log_path):
+        print('  ' + line)
+    return 1
+
+
 def fmt(value, unit='', spec='%.2f'):
     if value is None:
         return '-'
@@ -201,6 +209,8 @@ def main():
         import rospy
         from closed_loop.nodes.common import join_launch
         if not join_launch('demo_monitor', launch, MASTER_WAIT_S):
+            if launch.poll() is not None:
+                return report_early_end(launch, log_path)
             print('demo: roslaunch did not bring up a master; see %s' % log_path)
             return 1
         outline_xy = None
@@ -221,10 +231,7 @@ def main():
         next_status = started
         while time.monotonic() - started < args.seconds:
             if launch.poll() is not None:
-                print('\ndemo: the launch ended early (roslaunch exit code %s); see %s' % (launch.returncode, log_path))
-                for line in launch_failure_lines(log_path):
-                    print('  ' + line)
-                return 1
+                return report_early_end(launch, log_path)
             now = time.monotonic()
             with mon.lock:
                 truth, done = mon.truth, (mon.moved and mon.rest_since is not None
