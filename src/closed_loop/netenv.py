@@ -10,7 +10,10 @@ else the user set is left alone: that is how a graph is opened to other machines
 
 ``python3 -m closed_loop.netenv`` prints the ``export`` lines for a shell (``env.sh`` uses it).
 """
+import random
+import socket
 import sys
+import xmlrpc.client
 from urllib.parse import urlsplit
 
 LOOPBACK_IP = '127.0.0.1'
@@ -48,6 +51,49 @@ def apply_loopback_defaults(environ):
     added = loopback_defaults(environ)
     environ.update(added)
     return added
+
+
+def free_loopback_port():
+    """A TCP port free on 127.0.0.1 now, for a master of our own, below the kernel's ephemeral range: every
+    node binds its servers to ephemeral ports, so a node of a graph running beside could take a number
+    from that range between this call and the master's bind."""
+    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
+        ephemeral_low = int(f.read().split()[0])
+    low = min(20000, ephemeral_low // 2)
+    while True:
+        port = random.randrange(low, ephemeral_low)
+        with socket.socket() as s:
+            try:
+                s.bind((LOOPBACK_IP, port))
+            except OSError:
+                continue
+            return port
+
+
+class _BoundedTransport(xmlrpc.client.Transport):
+    """XML-RPC over HTTP that gives up after ``timeout_s`` (what listens may accept and never answer)."""
+
+    def __init__(self, timeout_s):
+        super().__init__()
+        self.timeout_s = timeout_s
+
+    def make_connection(self, host):
+        connection = super().make_connection(host)
+        connection.timeout = self.timeout_s
+        return connection
+
+
+def master_pid(uri, timeout_s=2.0):
+    """The pid of the ROS master answering at ``uri``, or None where none does within ``timeout_s`` s: nothing
+    listening, something that does not speak XML-RPC or never answers (rosgraph's own check then waits
+    forever), or a node's API (it has no ``getSystemState``)."""
+    try:
+        proxy = xmlrpc.client.ServerProxy(uri, transport=_BoundedTransport(timeout_s))
+        code, _, _ = proxy.getSystemState('/master_check')
+        pid_code, _, pid = proxy.getPid('/master_check')
+    except Exception:   # refused, timed out, not XML-RPC, no such method, a malformed URI
+        return None
+    return pid if code == 1 and pid_code == 1 and isinstance(pid, int) else None
 
 
 def main(environ=None, out=sys.stdout):

@@ -1,37 +1,25 @@
 """Fixtures of the system tests: real ROS processes (a master, nodes, roslaunch) on loopback, each test on
 its own free port, with logs in the test's temporary folder."""
 import os
-import random
 import signal
 import socket
 import subprocess
 import sys
 import time
-import xmlrpc.client
 
 import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
+from closed_loop import netenv  # noqa: E402
 # Bounds that only catch hangs.
 MASTER_WAIT_S = 20.0
 
 
 def free_port():
-    """A TCP port free on 127.0.0.1 now, below the kernel's ephemeral range: every node binds its own servers
-    to ephemeral ports, so one that tests run side by side start could take a number from that range between
-    this call and the master's bind (a test's watcher once waited 120 s on a node's port)."""
-    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
-        ephemeral_low = int(f.read().split()[0])
-    low = min(20000, ephemeral_low // 2)
-    while True:
-        port = random.randrange(low, ephemeral_low)
-        with socket.socket() as s:
-            try:
-                s.bind(('127.0.0.1', port))
-            except OSError:
-                continue
-            return port
+    """A loopback port for a test's own master (below the ephemeral range: a test's watcher once waited 120 s
+    on a port a node's server had taken)."""
+    return netenv.free_loopback_port()
 
 
 def ros_env(tmp_path, port, **extra):
@@ -49,28 +37,11 @@ def master_up(port):
         return s.connect_ex(('127.0.0.1', port)) == 0
 
 
-class _PatientTransport(xmlrpc.client.Transport):
-    """XML-RPC over HTTP that gives up after a couple of seconds (what listens may not speak HTTP at all)."""
-
-    def make_connection(self, host):
-        connection = super().make_connection(host)
-        connection.timeout = 2.0
-        return connection
-
-
 def master_pid(port):
     """The pid of the ROS master answering on ``port``, or None where none does: not just anything listening
     there, since once a graph has let its port go, another test's node may take the same number for its own
     server."""
-    if not master_up(port):
-        return None
-    try:
-        proxy = xmlrpc.client.ServerProxy('http://127.0.0.1:%d' % port, transport=_PatientTransport())
-        code, _, _ = proxy.getSystemState('/leftover_check')
-        pid_code, _, pid = proxy.getPid('/leftover_check')
-    except Exception:   # not XML-RPC, or a node's API (it has no getSystemState), or gone meanwhile
-        return None
-    return pid if code == 1 and pid_code == 1 else None
+    return netenv.master_pid('http://127.0.0.1:%d' % port) if master_up(port) else None
 
 
 def wait_master(port, process=None, timeout_s=MASTER_WAIT_S):

@@ -49,7 +49,7 @@ def running_keepers(root):
                 parent = int(f.read().rsplit(')', 1)[1].split()[1])
         except OSError:
             continue
-        if any(a.endswith(b'graph_keeper.py') for a in argv) and os.path.exists(argv[-2].decode() + '/port'):
+        if graph_keeper.__name__.encode() in argv and os.path.exists(argv[-2].decode() + '/port'):
             keepers.append((pid, parent))
     return keepers
 

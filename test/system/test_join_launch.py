@@ -46,3 +46,24 @@ def test_no_master_is_reported_not_waited_for_forever(tmp_path):
     done = subprocess.run([sys.executable, '-c', code, ROOT], env=ros_env(tmp_path, port),
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
     assert b'joined False' in done.stdout, done.stdout
+
+
+def test_a_port_that_accepts_and_never_answers_is_no_master(tmp_path):
+    """rosgraph's own check waits forever on such a port; the tools give up at their bound."""
+    port = free_port()
+    code = textwrap.dedent('''
+        import socket, subprocess, sys, time
+        sys.path.insert(0, sys.argv[1] + '/src')
+        from closed_loop.nodes.common import join_launch
+        silent = socket.socket()
+        silent.bind(('127.0.0.1', int(sys.argv[2])))
+        silent.listen(8)
+        launch = subprocess.Popen(['sleep', '60'])
+        started = time.monotonic()
+        joined = join_launch('joiner', launch, 3.0)
+        print('joined %s after %.0f s' % (joined, time.monotonic() - started))
+        launch.kill()
+    ''')
+    done = subprocess.run([sys.executable, '-c', code, ROOT, str(port)], env=ros_env(tmp_path, port),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
+    assert b'joined False' in done.stdout, done.stdout

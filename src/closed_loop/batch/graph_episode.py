@@ -35,6 +35,8 @@ REAL_TIME_FACTOR = 4.0
 STARTUP_S, SLACK_S = 40.0, 20.0
 #: After the verdict or an error, how long the keeper gets to shut the graph down (s).
 SHUTDOWN_S = graph_keeper.GRACE_S + 10.0
+#: Where the keeper finds this package, as this process did.
+KEEPER_PATH = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(graph_keeper.__file__))))
 #: How many lines of a log an error quotes.
 TAIL_LINES = 8
 CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest')
@@ -198,9 +200,11 @@ def run_graph(spec, prepared, folder=None, bag=None):
             f.write(launch_text(spec, prepared, folder, bag))
         mark = os.path.abspath(folder) + os.sep
         env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
+                   PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))),
                    **{graph_keeper.MARK: mark})
         with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
-            keeper = subprocess.Popen([sys.executable, graph_keeper.__file__, folder, launch_file], stdin=subprocess.PIPE,
+            keeper = subprocess.Popen([sys.executable, '-m', graph_keeper.__name__, folder, launch_file],
+                                      stdin=subprocess.PIPE,
                                       stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
         try:
             verdict, track, error = _wait(spec, folder, keeper)

@@ -1,7 +1,7 @@
 """The keeper of one graph episode's ROS graph: a small process that owns a master on a free loopback port and
 the roslaunch of the episode, and leaves nothing behind.
 
-    python3 graph_keeper.py FOLDER LAUNCH_FILE
+    python3 -m closed_loop.batch.graph_keeper FOLDER LAUNCH_FILE
 
 It starts ``rosmaster`` on a port it has checked is its own (the master answers with its pid), writes the
 port to FOLDER/port, runs ``roslaunch`` of LAUNCH_FILE on it (output in FOLDER/graph.log), and shuts the
@@ -15,12 +15,12 @@ worker has.
 """
 import os
 import signal
-import socket
 import subprocess
 import sys
 import threading
 import time
-import xmlrpc.client
+
+from closed_loop import netenv
 
 #: roslaunch waits this long after SIGINT (s) before SIGTERM, and this long after SIGTERM before SIGKILL.
 NODE_SIGINT_S, NODE_SIGTERM_S = 3.0, 2.0
@@ -58,28 +58,21 @@ def kill_marked(prefix):
             pass
 
 
-def free_port():
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
-
-
 def start_master(folder, env):
     """(port, process) of a master of our own on a free loopback port."""
     log = open(os.path.join(folder, 'master.log'), 'ab')
     for _ in range(MASTER_TRIES):
-        port = free_port()
+        port = netenv.free_loopback_port()
         master = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=log, stderr=subprocess.STDOUT,
                                   env=env)
         deadline = time.monotonic() + MASTER_WAIT_S
         while time.monotonic() < deadline and master.poll() is None:
-            try:
-                code, _, pid = xmlrpc.client.ServerProxy('http://127.0.0.1:%d' % port).getPid('/graph_keeper')
-                if code == 1 and pid == master.pid:
-                    return port, master
+            pid = netenv.master_pid('http://127.0.0.1:%d' % port)
+            if pid == master.pid:
+                return port, master
+            if pid is not None:
                 break                       # another master answers there: try another port
-            except OSError:
-                time.sleep(0.05)
+            time.sleep(0.05)
         if master.poll() is None:
             master.kill()
             master.wait()

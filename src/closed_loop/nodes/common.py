@@ -11,7 +11,7 @@ import rospy
 from dynamic_reconfigure.server import Server as ReconfigureServer
 from geometry_msgs.msg import Twist
 
-from closed_loop import reconfigure, robot_model
+from closed_loop import netenv, reconfigure, robot_model
 from closed_loop.settings import SettingsError, from_params
 
 #: How often a repeated warning or error of a node may reappear in the log (s).
@@ -75,8 +75,9 @@ def join_launch(name, launch, wait_s):
     launch ends, which ends those retries.
     """
     import rosgraph
+    uri = rosgraph.get_master_uri()
     deadline = time.monotonic() + wait_s
-    while not rosgraph.is_master_online():
+    while netenv.master_pid(uri) is None:
         if launch.poll() is not None or time.monotonic() > deadline:
             return False
         time.sleep(0.2)
