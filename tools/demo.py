@@ -11,8 +11,6 @@ import argparse
 import dataclasses
 import math
 import os
-import signal
-import subprocess
 import sys
 import threading
 import time
@@ -20,7 +18,7 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import netenv, robot_model
+from closed_loop import launcher, netenv, robot_model  # noqa: E402
 from closed_loop.sim import obstacles, shapes, world as world_mod  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
 from closed_loop.sim import quiet  # noqa: E402
@@ -202,9 +200,13 @@ def main():
             c, s = math.cos(start.yaw), math.sin(start.yaw)
             cmd += ['goal_x:=%.3f' % (c * dx + s * dy), 'goal_y:=%.3f' % (-s * dx + c * dy)]
         cmd += args.launch_args
+    problem = launcher.master_problem(os.environ['ROS_MASTER_URI'])
+    if problem is not None:
+        print('demo: %s; nothing started' % problem)
+        return 1
     print('demo: %s   (full log: %s)' % (' '.join(cmd), log_path), flush=True)
     log = open(log_path, 'w')
-    launch = subprocess.Popen(cmd, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    launch = launcher.Launch(cmd[1:], log)
     try:
         import rospy
         from closed_loop.nodes.common import join_launch
@@ -290,14 +292,7 @@ def main():
                                       % mon.contacts))
             return 0 if mon.contacts == 0 else 1
     finally:
-        try:
-            os.killpg(launch.pid, signal.SIGINT)
-            launch.wait(timeout=15)
-        except (ProcessLookupError, subprocess.TimeoutExpired):
-            try:
-                os.killpg(launch.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
+        launch.end()
         log.close()
 
 

@@ -7,8 +7,6 @@ Usage (inside ``source env.sh``): python3 tools/screenshot.py [--world red_box] 
 import argparse
 import math
 import os
-import signal
-import subprocess
 import sys
 import time
 
@@ -17,7 +15,7 @@ import cv2
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop import netenv  # noqa: E402
+from closed_loop import launcher, netenv  # noqa: E402
 from closed_loop.screen import VirtualScreen  # noqa: E402
 
 MASTER_PORT = 11397
@@ -34,13 +32,16 @@ def main():
     args = parser.parse_args()
     env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % MASTER_PORT)
     os.environ.update(env)
+    problem = launcher.master_problem(env['ROS_MASTER_URI'])
+    if problem is not None:
+        print('screenshot: %s; nothing started' % problem)
+        return 1
     log_path = os.path.join(ROOT, 'test_output', 'screenshot.log')
     os.makedirs(os.path.dirname(log_path), exist_ok=True)
     with VirtualScreen() as screen, open(log_path, 'w') as log:
         env['DISPLAY'] = screen.display
-        launch = subprocess.Popen(['roslaunch', '-p', str(MASTER_PORT), 'closed_loop', 'demo.launch',
-                                   'world:=' + args.world, 'rviz:=true'], stdout=log, stderr=subprocess.STDOUT,
-                                  env=env, start_new_session=True)
+        launch = launcher.Launch(['-p', str(MASTER_PORT), 'closed_loop', 'demo.launch', 'world:=' + args.world,
+                                  'rviz:=true'], log, env)
         try:
             import rospy
             from nav_msgs.msg import Odometry
@@ -57,11 +58,7 @@ def main():
             time.sleep(RENDER_SETTLE_S)
             rgb = screen.screenshot()
         finally:
-            os.killpg(launch.pid, signal.SIGINT)
-            try:
-                launch.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                os.killpg(launch.pid, signal.SIGKILL)
+            launch.end()
     cv2.imwrite(args.out, cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
     print('screenshot: %s (%dx%d)' % (os.path.relpath(args.out, ROOT), rgb.shape[1], rgb.shape[0]))
     return 0

@@ -1,0 +1,91 @@
+"""A roslaunch that the package's tools (``make demo``, the screenshot) start and end, leaving nothing behind.
+
+roslaunch starts the master it brings up in a session of its own, and when roslaunch itself is stuck (its
+master does not answer) a signal to its group does not reach that master. So every process of the launch
+carries a mark in its environment (``closed_loop.batch.graph_keeper.MARK``, as a sweep's graphs do) and, once
+roslaunch has had its time to end them, whatever still carries the mark is killed.
+
+Before starting, :func:`master_problem` tells a master URI where something listens but does not answer as a
+master (a roscore stopped with Ctrl-Z accepts connections and never answers; rosgraph's own check then
+waits forever, and roslaunch with it). Free of ROS.
+"""
+import os
+import signal
+import socket
+import subprocess
+import time
+from urllib.parse import urlsplit
+
+from closed_loop import netenv
+from closed_loop.batch import graph_keeper
+
+#: How long roslaunch gets after SIGINT to end its nodes and its master (s).
+END_WAIT_S = 15.0
+#: How long a master gets to answer (s).
+ANSWER_WAIT_S = 3.0
+
+
+def master_problem(uri):
+    """None when the master at ``uri`` answers, or nothing listens there (roslaunch will start one); else one
+    line that says what is wrong."""
+    try:
+        parts = urlsplit(uri)
+        address = (parts.hostname, parts.port)
+    except ValueError:
+        return 'ROS_MASTER_URI %r is not a URI of the form http://HOST:PORT' % uri[:200]
+    if not address[0] or not address[1]:
+        return 'ROS_MASTER_URI %r is not a URI of the form http://HOST:PORT' % uri[:200]
+    try:
+        with socket.create_connection(address, timeout=ANSWER_WAIT_S):
+            pass
+    except OSError:
+        return None
+    if netenv.master_pid(uri, ANSWER_WAIT_S) is not None:
+        return None
+    return ('something listens at %s (ROS_MASTER_URI) but does not answer as a ROS master within %g s: a '
+            'roscore stopped with Ctrl-Z (resume it with fg, or end it), or another program on that port'
+            % (uri[:200], ANSWER_WAIT_S))
+
+
+class Launch:
+    """``roslaunch`` with ``args`` (a list; never through a shell), its output to ``log`` (a file), in a
+    session of its own; :meth:`end` (or leaving a ``with`` block) ends it and everything it started."""
+
+    def __init__(self, args, log, env=None):
+        self.mark = 'launch-%d-%d%s' % (os.getpid(), time.monotonic_ns(), os.sep)
+        env = dict(os.environ if env is None else env, **{graph_keeper.MARK: self.mark})
+        self.process = subprocess.Popen(['roslaunch'] + list(args), stdout=log, stderr=subprocess.STDOUT,
+                                        env=env, start_new_session=True)
+        self.pid = self.process.pid
+
+    def poll(self):
+        return self.process.poll()
+
+    def wait(self, timeout=None):
+        return self.process.wait(timeout)
+
+    @property
+    def returncode(self):
+        return self.process.returncode
+
+    def end(self, wait_s=END_WAIT_S):
+        """SIGINT to roslaunch's group; after ``wait_s`` SIGKILL to it; then SIGKILL to whatever of the launch
+        is left in any session (a master roslaunch could not end)."""
+        try:
+            os.killpg(self.process.pid, signal.SIGINT)
+            self.process.wait(timeout=wait_s)
+        except (ProcessLookupError, subprocess.TimeoutExpired):
+            pass
+        try:
+            os.killpg(self.process.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        if self.process.poll() is None:
+            self.process.wait()
+        graph_keeper.kill_marked(self.mark)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *_):
+        self.end()

@@ -1,0 +1,39 @@
+"""Before a tool starts a launch: a master URI where something listens but no master answers is named."""
+import socket
+import threading
+from xmlrpc.server import SimpleXMLRPCServer
+
+from closed_loop import launcher
+from test_netenv import _MasterApi
+
+
+def test_nothing_listening_is_no_problem():
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))            # bound, not listening: refused, so roslaunch will start a master
+        assert launcher.master_problem('http://127.0.0.1:%d' % s.getsockname()[1]) is None
+
+
+def test_a_port_that_accepts_and_never_answers_is_named():
+    with socket.socket() as s:
+        s.bind(('127.0.0.1', 0))
+        s.listen(4)
+        uri = 'http://127.0.0.1:%d' % s.getsockname()[1]
+        problem = launcher.master_problem(uri)
+    assert problem is not None and uri in problem and 'does not answer as a ROS master' in problem, problem
+
+
+def test_an_answering_master_is_no_problem():
+    server = SimpleXMLRPCServer(('127.0.0.1', 0), logRequests=False)
+    server.register_instance(_MasterApi())
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        assert launcher.master_problem('http://127.0.0.1:%d' % server.server_address[1]) is None
+    finally:
+        server.shutdown()
+        server.server_close()
+
+
+def test_a_malformed_uri_is_named_and_cut():
+    problem = launcher.master_problem('not a uri ' + 'x' * 1000)
+    assert problem.startswith('ROS_MASTER_URI ') and len(problem) < 300, problem
+    assert launcher.master_problem('http://127.0.0.1:notaport') is not None
