@@ -2,7 +2,7 @@
 
 roslaunch starts the master it brings up in a session of its own, and when roslaunch itself is stuck (its
 master does not answer) a signal to its group does not reach that master. So every process of the launch
-carries a mark in its environment (``closed_loop.batch.graph_keeper.MARK``, as a sweep's graphs do) and, once
+carries a mark in its environment (:data:`MARK`, as a sweep's graph episodes do) and, once
 roslaunch has had its time to end them, whatever still carries the mark is killed.
 
 Before starting, :func:`master_problem` tells a master URI where something listens but does not answer as a
@@ -17,7 +17,34 @@ import time
 from urllib.parse import urlsplit
 
 from closed_loop import netenv
-from closed_loop.batch import graph_keeper
+
+#: The environment variable that marks every process of a launch (a sweep's graph episode: its folder).
+MARK = 'CLOSED_LOOP_GRAPH'
+
+
+def marked_processes(prefix):
+    """Pids of the processes (this user's that can be read) whose ``CLOSED_LOOP_GRAPH`` starts with ``prefix``."""
+    found, mark = [], (MARK + '=' + prefix).encode()
+    for name in os.listdir('/proc'):
+        if not name.isdigit() or int(name) == os.getpid():
+            continue
+        try:
+            with open('/proc/%s/environ' % name, 'rb') as f:
+                if any(item.startswith(mark) for item in f.read().split(b'\0')):
+                    found.append(int(name))
+        except OSError:
+            continue            # gone, or not ours to read
+    return found
+
+
+def kill_marked(prefix):
+    """SIGKILL every process marked with ``prefix`` (see :func:`marked_processes`)."""
+    for pid in marked_processes(prefix):
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
+
 
 #: How long roslaunch gets after SIGINT to end its nodes and its master (s).
 END_WAIT_S = 15.0
@@ -53,7 +80,7 @@ class Launch:
 
     def __init__(self, args, log, env=None):
         self.mark = 'launch-%d-%d%s' % (os.getpid(), time.monotonic_ns(), os.sep)
-        env = dict(os.environ if env is None else env, **{graph_keeper.MARK: self.mark})
+        env = dict(os.environ if env is None else env, **{MARK: self.mark})
         self.process = subprocess.Popen(['roslaunch'] + list(args), stdout=log, stderr=subprocess.STDOUT,
                                         env=env, start_new_session=True)
         self.pid = self.process.pid
@@ -82,7 +109,7 @@ class Launch:
             pass
         if self.process.poll() is None:
             self.process.wait()
-        graph_keeper.kill_marked(self.mark)
+        kill_marked(self.mark)
 
     def __enter__(self):
         return self

@@ -15,7 +15,8 @@ import time
 ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
-from closed_loop.batch import graph_episode, graph_keeper, sweep, sweep_file  # noqa: E402
+from closed_loop import launcher  # noqa: E402
+from closed_loop.batch import graph_episode, sweep, sweep_file  # noqa: E402
 
 GRID = {'settings.stop_distance': [0.3, 0.4, 0.5, 0.6, 0.7], 'settings.cruise_speed': [0.3, 0.4, 0.5, 0.7, 1.0],
         'world': ['wall', 'red_box']}
@@ -32,7 +33,7 @@ def main():
             wall = time.monotonic() - started
             outcomes = collections.Counter(r['outcome'] for r in rows)
             simulated = sum(float(r['time_s'] or 0) for r in rows)
-            left = graph_keeper.marked_processes(out)
+            left = launcher.marked_processes(out)
         per_minute[workers] = 60.0 * len(rows) / wall
         print('%d worker%s: %d episodes in %.0f s: %.1f episodes per minute, %.1f simulated s per wall s; %s; '
               'left running: %d processes' % (workers, '' if workers == 1 else 's', len(rows), wall,

@@ -163,9 +163,9 @@ def graph_leftovers(root):
     mark (running ones: a zombie has no environment left) and their masters still answering on their ports
     (a master there that does not carry the mark is another test's, which took the number once it was free)."""
     import glob
-    from closed_loop.batch import graph_keeper
+    from closed_loop import launcher
     ports = [int(open(path).read()) for path in glob.glob(os.path.join(str(root), '**', 'port'), recursive=True)]
-    marked = graph_keeper.marked_processes(str(root))
+    marked = launcher.marked_processes(str(root))
     return {'processes': marked, 'listening': [p for p in ports if master_pid(p) in marked]}
 
 

@@ -39,9 +39,10 @@ def start_sweep(sweep, out):
 
 def running_keepers(root):
     """(keeper pid, its parent: the worker) of the graphs under ``root`` that are up (their master's port known)."""
+    from closed_loop import launcher
     from closed_loop.batch import graph_keeper
     keepers = []
-    for pid in graph_keeper.marked_processes(str(root)):
+    for pid in launcher.marked_processes(str(root)):
         try:
             with open('/proc/%d/cmdline' % pid, 'rb') as f:
                 argv = f.read().rstrip(b'\0').split(b'\0')

@@ -40,7 +40,6 @@ def test_the_demo_names_a_stopped_master_and_starts_nothing(roscore, tmp_path):
 
 def test_a_launch_ends_the_master_roslaunch_could_not(tmp_path):
     from closed_loop import launcher
-    from closed_loop.batch import graph_keeper
     port = free_port()
     env = ros_env(tmp_path, port)
     with open(str(tmp_path / 'launch.log'), 'w') as log:
@@ -55,4 +54,4 @@ def test_a_launch_ends_the_master_roslaunch_could_not(tmp_path):
         finally:
             launch.end(wait_s=5.0)
     assert gone(master), 'pid %d (the master) outlived the launch' % master
-    assert not graph_keeper.marked_processes(launch.mark)
+    assert not launcher.marked_processes(launch.mark)

@@ -23,6 +23,7 @@ from xml.sax.saxutils import quoteattr
 
 import yaml
 
+from closed_loop import launcher
 from closed_loop.batch import graph_keeper
 from closed_loop.batch.episode import EpisodeError, generated_world, judge_settings, result_from_verdict
 from closed_loop.batch.judge import Verdict, track_from_dict
@@ -201,7 +202,7 @@ def run_graph(spec, prepared, folder=None, bag=None):
         mark = os.path.abspath(folder) + os.sep
         env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
                    PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))),
-                   **{graph_keeper.MARK: mark})
+                   **{launcher.MARK: mark})
         with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
             keeper = subprocess.Popen([sys.executable, '-m', graph_keeper.__name__, folder, launch_file],
                                       stdin=subprocess.PIPE,
@@ -215,7 +216,7 @@ def run_graph(spec, prepared, folder=None, bag=None):
             except subprocess.TimeoutExpired:
                 os.killpg(keeper.pid, 9)
                 keeper.wait()
-            graph_keeper.kill_marked(mark)          # whatever the keeper could not
+            launcher.kill_marked(mark)          # whatever the keeper could not
     wall_s = time.monotonic() - started
     if verdict is None:
         c = prepared.graph

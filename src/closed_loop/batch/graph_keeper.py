@@ -21,6 +21,7 @@ import threading
 import time
 
 from closed_loop import netenv
+from closed_loop.launcher import MARK, kill_marked
 
 #: roslaunch waits this long after SIGINT (s) before SIGTERM, and this long after SIGTERM before SIGKILL.
 NODE_SIGINT_S, NODE_SIGTERM_S = 3.0, 2.0
@@ -28,34 +29,6 @@ NODE_SIGINT_S, NODE_SIGTERM_S = 3.0, 2.0
 GRACE_S = NODE_SIGINT_S + NODE_SIGTERM_S + 3.0
 MASTER_WAIT_S = 15.0
 MASTER_TRIES = 5
-
-
-#: The environment variable that marks every process of a graph: its episode folder.
-MARK = 'CLOSED_LOOP_GRAPH'
-
-
-def marked_processes(prefix):
-    """Pids of the processes (this user's that can be read) whose ``CLOSED_LOOP_GRAPH`` starts with ``prefix``."""
-    found, mark = [], (MARK + '=' + prefix).encode()
-    for name in os.listdir('/proc'):
-        if not name.isdigit() or int(name) == os.getpid():
-            continue
-        try:
-            with open('/proc/%s/environ' % name, 'rb') as f:
-                if any(item.startswith(mark) for item in f.read().split(b'\0')):
-                    found.append(int(name))
-        except OSError:
-            continue            # gone, or not ours to read
-    return found
-
-
-def kill_marked(prefix):
-    """SIGKILL every process marked with ``prefix`` (see :func:`marked_processes`)."""
-    for pid in marked_processes(prefix):
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except OSError:
-            pass
 
 
 def start_master(folder, env):

@@ -26,6 +26,7 @@ import sys
 import itertools
 import time
 
+from closed_loop import launcher
 from closed_loop.batch import graph_keeper, pictures, rows_file, sweep_file, sweep_report
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
@@ -258,9 +259,9 @@ def _wait_graphs_down(logs_root, timeout_s=graph_keeper.GRACE_S + 5.0):
     their graphs down once their workers are gone; wait for that, then kill whatever is left of them."""
     prefix = logs_root + os.sep
     deadline = time.monotonic() + timeout_s
-    while graph_keeper.marked_processes(prefix) and time.monotonic() < deadline:
+    while launcher.marked_processes(prefix) and time.monotonic() < deadline:
         time.sleep(0.2)
-    graph_keeper.kill_marked(prefix)
+    launcher.kill_marked(prefix)
 
 
 def _digest(spec):
