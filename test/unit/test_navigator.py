@@ -82,6 +82,18 @@ def test_a_gap_wide_enough_is_taken():
     assert p.linear_x > 0.2 and abs(p.angular_z) < 0.3
 
 
+def test_where_what_is_remembered_shuts_the_only_way_the_newest_scan_is_asked():
+    # A wall across the way with one gap, 0.8 m wide, to the left; odometry has carried remembered points into it.
+    wall = [((1.5, -3.0), (1.5, 0.8)), ((1.5, 1.6), (1.5, 3.0))]
+    remembered = numpy.column_stack((numpy.full(17, 1.5), numpy.linspace(0.8, 1.6, 17)))
+    p = plan(scan_of(segments=wall), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), NavigatorSettings(), remembered)
+    assert p.way is not None and p.aim_xy[1] > 0.3, p.aim_xy
+    # The scan shows the gap shut too: no way, and the goal is the aim.
+    closed = wall + [((1.5, 0.8), (1.5, 1.6))]
+    p = plan(scan_of(segments=closed), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), NavigatorSettings(), remembered)
+    assert p.way is None and p.aim_xy == (10.0, 0.0)
+
+
 def test_boxed_in_gives_zero():
     box = [((0.3, -0.25), (0.3, 0.25)), ((-0.25, -0.25), (-0.25, 0.25)), ((-0.25, 0.25), (0.3, 0.25)),
            ((-0.25, -0.25), (0.3, -0.25))]

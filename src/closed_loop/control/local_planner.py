@@ -48,6 +48,11 @@ CLEARANCE_CAP_M = 1.0
 #: The way to the aim must be this much wider (m, each side) than the robot plus its margins: a gap the
 #: window could only just pass is not one to aim for.
 AIM_ROOM_M = 0.02
+#: Where the scan and what is remembered show no such way, the newest scan alone is asked for one with this much
+#: room (m, each side) beyond the robot's half-width: remembered points are carried by odometry, which drifts,
+#: and the places closed after getting stuck can shut the only way out. It guides the arcs only; every command
+#: still keeps the margin from the scan and what is remembered where the scan cannot see.
+SCAN_WAY_ROOM_M = 0.03
 #: At most this many candidates in doubt are checked exactly per decision (each costs about 0.1 ms).
 EXACT_CHECKS = 4
 #: An aim more than this far (rad) to a side decides which way to turn in place.
@@ -282,11 +287,15 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
 
     goal_distance = math.hypot(*goal_xy)
     # What the arcs are scored toward: a point along the way to the goal through the free space the scan
-    # shows (closed_loop.control.wavefront), or the goal itself when it shows none.
+    # shows (closed_loop.control.wavefront), else through what the newest scan alone shows (SCAN_WAY_ROOM_M),
+    # or the goal itself when neither shows one.
     half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
     seen = numpy.concatenate([scanned] + [extra for extra in (remembered, closed) if extra is not None and len(extra)])
     way = wavefront.way(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
                         0.5 * (footprint.y_max - footprint.y_min), corridor, kept_way)
+    if way is None and corridor is None:
+        way = wavefront.way(scanned, goal_xy, 0.5 * (footprint.y_max - footprint.y_min) + SCAN_WAY_ROOM_M,
+                            max(1.0, s.max_speed * s.lookahead), 0.5 * (footprint.y_max - footprint.y_min))
     aim_xy = goal_xy if way is None else way.aim
     if corridor is not None and way is not None and way.goal != tuple(goal_xy):
         # The line is closed off within the corridor: go up to where, steering for the far point (which keeps
