@@ -38,7 +38,7 @@ def drive(world, steps=900):
             if k % 10 == 0 or began:
                 pose, _ = sim.ground_truth()
                 link = sim.link_pose(lidar.frame)
-                dirs = lidar._ray_dirs @ sim.rotation_matrix(link.orientation).T
+                dirs = (sim.rotation_matrix(link.orientation) @ lidar._ray_axes).T
                 truth = exact.cast(None, link.position, dirs, lidar.settings.range_max)
                 log.append((k, pose.position, sim.clearance(2.0), lidar.sample(sim), truth, tuple(began)))
     finally:

@@ -121,7 +121,7 @@ def test_the_rays_the_robots_own_body_stops_are_those_a_cast_finds(name, mast):
         sim, lidar = rig.sim, rig.sensors[Lidar]
         ranges = lidar.sample(sim)
         pose = sim.link_pose(lidar.frame)
-        dirs = lidar._ray_dirs @ sim.rotation_matrix(pose.orientation).T
+        dirs = (sim.rotation_matrix(pose.orientation) @ lidar._ray_axes).T
         origin = numpy.asarray(pose.position)
         uids, _ = sim.cast_rays(numpy.repeat(origin[None, :], len(dirs), axis=0), origin + dirs)
         stopped = uids == sim.robot_id

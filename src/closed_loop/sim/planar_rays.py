@@ -46,6 +46,10 @@ class PlanarRays:
         self._radius = numpy.array([shapes.bounding_radius(o) for o in chosen])
         self._half_height = numpy.array([0.5 * o.size[2] for o in chosen])
         self._at = numpy.array([o.position for o in chosen], float).reshape(-1, 3)
+        # Where the obstacles were given, each coordinate apart; and the heights every one of them spans.
+        self._x, self._y, self._z = (numpy.ascontiguousarray(self._at[:, i]) for i in range(3))
+        self._spans = (float((self._z - self._half_height).max(initial=-numpy.inf)),
+                       float((self._z + self._half_height).min(initial=numpy.inf)))
 
     def cast(self, centres, origin, dirs, range_max, cull=True, fan=None):
         """Distances (N,) from ``origin`` (x, y, z) along ``dirs`` ((N, 3) unit vectors, near the horizontal)
@@ -59,55 +63,65 @@ class PlanarRays:
         circle covers, as seen from the origin; without, against every ray (the same distances: a test holds
         them equal). ``fan``: (bearing of the first ray, increment) in rad when ray i's bearing is
         first + i x increment (a LIDAR's, give or take its tilt), which finds the windows faster."""
-        x, y, z = (float(v) for v in origin)
+        x, y, z = map(float, origin)
         rise = dirs[:, 2]
         count = len(dirs)
         best = numpy.full(count, numpy.inf)
-        drift = range_max * float(numpy.abs(rise).max())     # how far a ray rises or falls over the range
+        top, bottom = float(rise.max()), float(rise.min())
+        drift = range_max * max(top, -bottom)         # how far a ray rises or falls over the range
         if drift:
             level = numpy.hypot(dirs[:, 0], dirs[:, 1])
-            flat = dirs[:, :2] / level[:, None]
-            down = rise < 0.0
-            best[down] = -z / rise[down]
+            fx, fy = dirs[:, 0] / level, dirs[:, 1] / level
+            if bottom < 0.0 and -z / bottom <= range_max:       # some ray meets the ground within the range
+                down = rise < 0.0
+                best[down] = -z / rise[down]
         else:                                   # a level scan (the usual one): its directions are already flat
-            level, flat = None, dirs[:, :2]
-        fx, fy = flat[:, 0], flat[:, 1]
-        at = self._at if centres is None else numpy.asarray(centres, float).reshape(-1, 3)[self._order]
-        rel_x, rel_y = at[:, 0] - x, at[:, 1] - y
+            level, fx, fy = None, dirs[:, 0], dirs[:, 1]
+        if centres is None:
+            ax, ay, az = self._x, self._y, self._z
+        else:
+            at = numpy.asarray(centres, float).reshape(-1, 3)[self._order]
+            ax, ay, az = at[:, 0], at[:, 1], at[:, 2]
+        rel_x, rel_y = ax - x, ay - y
         distance = numpy.hypot(rel_x, rel_y)
-        gap = numpy.abs(at[:, 2] - z)
-        near = numpy.flatnonzero((distance - self._radius <= range_max) & (gap <= self._half_height + drift))
+        within = distance - self._radius <= range_max
+        # Only obstacles whose height spans the scan's plane, give or take the drift (all of them, usually).
+        spans_all = centres is None and self._spans[0] <= z - drift and z + drift <= self._spans[1]
+        if not spans_all:
+            gap = numpy.abs(az - z)
+            within &= gap <= self._half_height + drift
+        near = numpy.flatnonzero(within)
         if not len(near):
             best[best > range_max] = numpy.inf
             return best
+        rel_x, rel_y, distance = rel_x[near], rel_y[near], distance[near]
         if not cull:
-            ray, obstacle = numpy.arange(count)[:, None], near[None, :]
+            ray, obstacle = numpy.arange(count)[:, None], numpy.arange(len(near))[None, :]
         elif fan is not None:
-            # A tilted fan's bearings stray from even spacing by less than its rays' greatest slope (the square
-            # of the tilt, for small ones): its windows are that much wider.
-            ray, obstacle = _fan_pairs(fan, count, near, rel_x[near], rel_y[near], distance[near], self._radius[near],
-                                       drift / range_max)
+            ray, obstacle = _fan_pairs(fan, count, rel_x, rel_y, distance, self._radius[near], drift / range_max)
         else:
             bearings = numpy.arctan2(fy, fx)
             order = numpy.argsort(bearings, kind='stable')
-            ray, obstacle = _sorted_pairs((bearings[order], order), near, rel_x[near], rel_y[near], distance[near],
-                                          self._radius[near])
-        # The pairs come obstacle by obstacle, so each shape's are one stretch of them.
-        cuts = numpy.searchsorted(obstacle[0] if not cull else obstacle, [g[1] for g in self._groups] + [len(at)])
-        for (shape, start, end, params), a, b in zip(self._groups, cuts[:-1], cuts[1:]):
+            ray, obstacle = _sorted_pairs((bearings[order], order), rel_x, rel_y, distance, self._radius[near])
+        # ``obstacle`` counts in ``near``, whose shapes come one after another; the pairs come obstacle by obstacle.
+        parts = numpy.searchsorted(near, [g[1] for g in self._groups] + [len(self._radius)])
+        high = not spans_all and (gap[near] + drift > self._half_height[near]).any()   # a ray may pass over one
+        for (shape, start, _end, params), a, b in zip(self._groups, parts[:-1], parts[1:]):
             if a == b:
                 continue
-            mine = obstacle[..., a:b]
-            rays = ray if not cull else ray[a:b]
-            local = mine - start
-            prepared = shape.ray_prepare(params, at[start:end, :2], (x, y))
-            along = shape.ray_pairs(prepared, local, fx[rays], fy[rays])
+            if len(self._groups) == 1:
+                mine, rays = obstacle, ray
+            else:
+                first, last = numpy.searchsorted(obstacle if cull else obstacle[0], (a, b))
+                mine, rays = obstacle[..., first:last], (ray[first:last] if cull else ray)
+            prepared = shape.ray_prepare(params[near[a:b] - start], rel_x[a:b], rel_y[a:b])
+            along = shape.ray_pairs(prepared, mine - a, fx[rays], fy[rays])
             if drift:
                 along = along / level[rays]
-                if (gap[near] + drift > self._half_height[near]).any():     # some ray may pass over or under one
+                if high:
                     with numpy.errstate(invalid='ignore'):                  # inf x 0 on a level ray that misses
-                        height = z + along * rise[rays] - at[mine, 2]
-                    along[numpy.abs(height) > self._half_height[mine]] = numpy.inf
+                        height = z + along * rise[rays] - az[near[a:b]][mine - a]
+                    along[numpy.abs(height) > self._half_height[near[a:b]][mine - a]] = numpy.inf
             if along.ndim == 2:
                 numpy.minimum(best, along.min(axis=1), out=best)
             else:
@@ -119,27 +133,37 @@ class PlanarRays:
 def _half_widths(distance, radius, margin=0.0):
     """Half the angle (rad) each bounding circle covers, seen from the origin, and ``margin``; pi from inside."""
     inside = distance <= radius
+    if not inside.any():
+        return numpy.arcsin(radius / distance) + (WINDOW_MARGIN_RAD + margin)
     half = numpy.arcsin(radius / numpy.where(inside, radius, distance))
     half[inside] = numpy.pi
     return half + (WINDOW_MARGIN_RAD + margin)
 
 
-def _expand(start, end, obstacle):
-    """(ray indices, obstacle indices) of the pairs: obstacle ``obstacle[m]`` with rays start[m] .. end[m] - 1."""
-    counts = numpy.maximum(end - start, 0)
+def _expand(start, counts):
+    """(ray indices, obstacle positions) of the pairs: obstacle m with rays start[m] .. start[m] + counts[m] - 1."""
     total = int(counts.sum())
     first = numpy.repeat(start - (numpy.cumsum(counts) - counts), counts)
-    return first + numpy.arange(total), numpy.repeat(obstacle, counts)
+    return first + numpy.arange(total), numpy.repeat(numpy.arange(len(counts)), counts)
 
 
-def _fan_pairs(fan, count, near, rel_x, rel_y, distance, radius, stray=0.0):
+def _fan_pairs(fan, count, rel_x, rel_y, distance, radius, stray=0.0):
     """The ray-obstacle pairs to test for a fan of ``count`` rays (bearings first + i x increment, give or take
-    ``stray`` rad): each obstacle ``near`` (its centre from the origin, its circle's radius) against the rays in
-    its window, found as index ranges; where a window reaches past the first ray's bearing or a full turn beyond
-    it, the part on the other side too. The pairs come in the order of ``near``."""
+    ``stray`` rad): each obstacle (its centre from the origin, its circle's radius) against the rays in its
+    window, found as index ranges. A full turn's window wraps round its ends; a partial fan's may reach past
+    the first ray's bearing or a full turn beyond it, where the part on the other side is taken too. The pairs
+    come obstacle by obstacle."""
     first, increment = fan
     centre = numpy.mod(numpy.arctan2(rel_y, rel_x) - first, TWO_PI)       # from the first ray, [0, 2 pi)
-    half = numpy.repeat(_half_widths(distance, radius, stray), 3)
+    half = _half_widths(distance, radius, stray)
+    if abs(count * increment - TWO_PI) < 1e-9:
+        # Ray indices: from ceil((centre - half) / increment) to floor((centre + half) / increment), at most a
+        # turn of them, each taken modulo the count.
+        start = numpy.ceil((centre - half) / increment)
+        counts = numpy.minimum(numpy.floor((centre + half) / increment) - start + 1.0, count).astype(numpy.intp)
+        ray, obstacle = _expand(start.astype(numpy.intp), counts)
+        return numpy.mod(ray, count), obstacle
+    half = numpy.repeat(half, 3)
     centre = (centre[:, None] + _TURNS).ravel()                           # each window, a turn before and after
     # Ray indices: from ceil((centre - half) / increment), to floor((centre + half) / increment) inclusive.
     bounds = numpy.floor(numpy.stack((half - centre, centre + half)) / increment)
@@ -147,13 +171,14 @@ def _fan_pairs(fan, count, near, rel_x, rel_y, distance, radius, stray=0.0):
     numpy.maximum(bounds, ((-count,), (-1,)), out=bounds)
     numpy.minimum(bounds, ((0,), (count - 1,)), out=bounds)
     edges = bounds.astype(numpy.intp)
-    return _expand(-edges[0], edges[1] + 1, numpy.repeat(near, 3))
+    ray, obstacle = _expand(-edges[0], numpy.maximum(edges[1] + 1 + edges[0], 0))
+    return ray, obstacle // 3
 
 
 _TURNS = numpy.array([-TWO_PI, 0.0, TWO_PI])
 
 
-def _sorted_pairs(windows, near, rel_x, rel_y, distance, radius):
+def _sorted_pairs(windows, rel_x, rel_y, distance, radius):
     """As :func:`_fan_pairs` for any rays: ``windows`` is (their bearings ascending in [-pi, pi], the ray index
     of each); each obstacle's window is found in them by search, and where it wraps past -pi or pi, the part on
     the other side too."""
@@ -164,5 +189,5 @@ def _sorted_pairs(windows, near, rel_x, rel_y, distance, radius):
     high = numpy.column_stack((centre + half - TWO_PI, centre + half, centre + half + TWO_PI)).ravel()
     start = numpy.searchsorted(sorted_bearings, low, 'left')
     end = numpy.searchsorted(sorted_bearings, high, 'right')
-    position, obstacle = _expand(start, end, numpy.repeat(near, 3))
-    return order[position], obstacle
+    position, obstacle = _expand(start, numpy.maximum(end - start, 0))
+    return order[position], obstacle // 3

@@ -68,11 +68,12 @@ class Box:
                              0.5 * math.hypot(o.size[0], o.size[1])) for o in obstacles]).reshape(-1, 5)
 
     @staticmethod
-    def ray_prepare(params, centres, origin):
-        """What :meth:`ray_pairs` needs of each box (``params`` rows of :meth:`ray_params`, ``centres`` (M, 2))
-        seen from ``origin`` (x, y): its yaw's cosine and sine, its half sizes, and the origin in its frame."""
+    def ray_prepare(params, rel_x, rel_y):
+        """What :meth:`ray_pairs` needs of each box (``params`` rows of :meth:`ray_params`; ``rel_x``, ``rel_y``
+        (M,): its centre seen from the rays' origin): its yaw's cosine and sine, its half sizes, and the
+        origin in its frame."""
         c, s, hx, hy = params[:, 0], params[:, 1], params[:, 2], params[:, 3]
-        rx, ry = origin[0] - centres[:, 0], origin[1] - centres[:, 1]
+        rx, ry = -rel_x, -rel_y
         return c, s, hx, hy, c * rx + s * ry, -s * rx + c * ry
 
     @staticmethod
@@ -131,11 +132,10 @@ class Cylinder:
         return numpy.array([(o.radius,) for o in obstacles]).reshape(-1, 1)
 
     @staticmethod
-    def ray_prepare(params, centres, origin):
+    def ray_prepare(params, rel_x, rel_y):
         """As :meth:`Box.ray_prepare`, for cylinders: the centre from the origin, and its squared distance less
         the squared radius."""
-        rx, ry = centres[:, 0] - origin[0], centres[:, 1] - origin[1]
-        return rx, ry, rx * rx + ry * ry - params[:, 0] * params[:, 0]
+        return rel_x, rel_y, rel_x * rel_x + rel_y * rel_y - params[:, 0] * params[:, 0]
 
     @staticmethod
     def ray_pairs(prepared, obstacle, fx, fy):

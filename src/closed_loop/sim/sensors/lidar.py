@@ -66,6 +66,9 @@ OWN_BODY_SLACK_M = 0.1
 #: The planar caster is used while the scan plane is this level (the sine of its tilt; the package's robot
 #: rests pitched by 0.009); beyond, pybullet's caster (a robot tipping over a bump).
 PLANAR_TILT_LIMIT = 0.05
+#: The rays the robot's own body stops, by (URDF text, LIDAR frame, ray layout, reach): the same for every
+#: simulation of that robot, so a worker running many episodes finds them once.
+_OWN_BODY = {}
 
 
 class Lidar(Sensor):
@@ -76,7 +79,9 @@ class Lidar(Sensor):
         Sensor.__init__(self, settings, sim)
         self.layout = scan_layout(settings.scan_angle_min, settings.scan_angle_max, settings.scan_samples)
         angles = self.layout.angle_min + self.layout.angle_increment * np.arange(self.layout.samples)
-        self._ray_dirs = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)], axis=1)
+        # The rays' directions in the LIDAR's frame, a row for each axis (so that each axis of them turned is a
+        # contiguous row, which the planar caster reads faster).
+        self._ray_axes = np.stack([np.cos(angles), np.sin(angles), np.zeros_like(angles)])
         self._rng = np.random.default_rng(settings.noise_seed)
         self.frame = sim.model.names.scan_frame
         self._planar = None
@@ -101,25 +106,18 @@ class Lidar(Sensor):
         s = self.settings
         pose = sim.link_pose(self.frame)
         rotation = sim.rotation_matrix(pose.orientation)
-        dirs = self._ray_dirs @ rotation.T
+        dirs = (rotation @ self._ray_axes).T
         origin = np.asarray(pose.position)
         if self._planar is not None and self._own_body is None:
-            # The robot's own body is within its footprint's diagonal of the LIDAR: no need to cast farther; and
-            # none of it where no ray can be within that reach (a LIDAR above the body): no need to cast at all.
-            fp = sim.model.footprint
-            reach = min(s.range_max, math.hypot(fp.length_m, fp.width_m) + OWN_BODY_SLACK_M)
-            rise = reach * float(np.abs(dirs[:, 2]).max())
-            if sim.reaches_height(origin[2] - rise, origin[2] + rise):
-                uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * reach)
-                self._own_body = uids == sim.robot_id
-            else:
-                self._own_body = np.zeros(len(dirs), bool)
+            self._own_body = self._own_body_rays(sim, origin, dirs)
+            self._own_body_any = bool(self._own_body.any())
         if self._planar is not None and max(abs(rotation[2, 0]), abs(rotation[2, 1])) <= PLANAR_TILT_LIMIT:
             centres = None if not sim.has_moving_obstacles else [position for _, position in sim.obstacle_positions()]
             fan = (math.atan2(dirs[0, 1], dirs[0, 0]), self.layout.angle_increment) \
                 if self.layout.angle_increment > 0 else None
-            ranges = self._planar.cast(centres, origin, dirs, s.range_max, fan=fan)
-            ranges[self._own_body] = np.inf
+            ranges = self._planar.cast(centres, pose.position, dirs, s.range_max, fan=fan)
+            if self._own_body_any:
+                ranges[self._own_body] = np.inf
             ranges[ranges < s.range_min] = -np.inf
         else:
             uids, fractions = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0),
@@ -132,3 +130,23 @@ class Lidar(Sensor):
             noisy = ranges[finite] + self._rng.normal(0.0, s.scan_noise_stddev, int(finite.sum()))
             ranges[finite] = np.clip(noisy, s.range_min, s.range_max)
         return ranges.astype(np.float32)
+
+    def _own_body_rays(self, sim, origin, dirs):
+        """Which rays the robot's own body stops (the robot as it stands, its LIDAR at ``origin``, its rays
+        ``dirs``), found with pybullet's caster once per robot and layout in a process."""
+        s = self.settings
+        # The robot's own body is within its footprint's diagonal of the LIDAR: no need to cast farther; and
+        # none of it where no ray can be within that reach (a LIDAR above the body): no need to cast at all.
+        fp = sim.model.footprint
+        reach = min(s.range_max, math.hypot(fp.length_m, fp.width_m) + OWN_BODY_SLACK_M)
+        key = (sim.model.urdf_text, self.frame, self.layout, reach)
+        if key not in _OWN_BODY:
+            rise = reach * float(np.abs(dirs[:, 2]).max())
+            if sim.reaches_height(origin[2] - rise, origin[2] + rise):
+                uids, _ = sim.cast_rays(np.repeat(origin[None, :], len(dirs), axis=0), origin + dirs * reach)
+                own = uids == sim.robot_id
+            else:
+                own = np.zeros(len(dirs), bool)
+            own.setflags(write=False)
+            _OWN_BODY[key] = own
+        return _OWN_BODY[key]
