@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 from closed_loop.sim.quiet import import_pybullet, native_output
 from closed_loop.sim import drive
+from closed_loop.sim.contact_room import BodyExtent, ContactRoom
 from closed_loop import robot_model
 from closed_loop.geometry import quaternion_yaw, yaw_quaternion
 
@@ -71,6 +72,7 @@ class Robot:
         self.odometry = drive.DeadReckoning()
         self._twist = drive.STOP
         self._wheel_targets = None
+        self._room = None       # the ContactRoom, made at the first contact check; False: none (see there)
         self._build()
 
     def _call(self, fn, *args, **kwargs):
@@ -171,6 +173,8 @@ class Robot:
         self._drive_wheels(0.0, 0.0)
         self.watchdog.clear()
         self.odometry.reset()
+        if self._room:
+            self._room.forget()
 
     # -- state ------------------------------------------------------------------------------------------
     def wheel_velocities(self):
@@ -208,6 +212,13 @@ class Robot:
         """The names of the obstacles (and other robots) this robot is in contact with now (not the ground)."""
         # Every body but the ground holds obstacles or another robot (called at every physics step: no lookup
         # unless there is a contact).
+        # Not while the robot is provably clear of every obstacle (closed_loop.sim.contact_room), which needs
+        # the obstacles standing still and no other robot.
+        if self._room is None:
+            self._room = False if self.sim.has_moving_obstacles or len(self.sim.robots) > 1 else ContactRoom(
+                self.sim.nearest_obstacle_m, BodyExtent(self._call, pybullet, self.robot_id, len(self._joints)))
+        if self._room and self._room.clear(*self._call(pybullet.getBasePositionAndOrientation, self.robot_id)):
+            return set()
         ground = self.sim.ground_id
         return {self.sim.name_at(c[2], c[6]) for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id)
                 if c[2] != ground}

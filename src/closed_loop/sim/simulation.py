@@ -299,6 +299,21 @@ class Simulation:
             least.setdefault(int(self._extent_uids[i]), float(bounds[i]))
         return [(bound, uid) for uid, bound in least.items()]
 
+    def nearest_obstacle_m(self, x, y, within_m):
+        """A lower bound (m) on the distance across the ground from the point (x, y) to every obstacle's
+        footprint (a static obstacle's own, a moving one's circle), or ``within_m`` when none comes nearer."""
+        if self._movers:
+            near = self.obstacles_near(x, y, within_m)
+            return near[0][0] if near else within_m
+        centres = self._extent_centres
+        bounds = numpy.hypot(centres[:, 0] - x, centres[:, 1] - y) - self._extent_radii
+        least = within_m
+        for i in numpy.flatnonzero(bounds < within_m)[numpy.argsort(bounds[bounds < within_m])]:
+            if bounds[i] >= least:
+                break
+            least = min(least, shapes.distance(self.world.obstacles[i], x, y))
+        return least
+
     @property
     def has_moving_obstacles(self):
         return bool(self._movers)
