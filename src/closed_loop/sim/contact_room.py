@@ -71,7 +71,7 @@ def _farthest(box, point, axes=3):
 
 def turn_rad(q0, q1):
     """The angle (rad) of the rotation between two orientations (quaternions x, y, z, w)."""
-    dot = abs(sum(a * b for a, b in zip(q0, q1)))
+    dot = abs(q0[0] * q1[0] + q0[1] * q1[1] + q0[2] * q1[2] + q0[3] * q1[3])
     return 2.0 * math.acos(min(1.0, dot))
 
 

@@ -19,7 +19,10 @@ class Contacts(Sensor):
         self.count = 0
 
     def sample(self, sim):
-        touching = set(sim.contacts_with_obstacles())
+        touching = sim.contacts_with_obstacles()
+        if not touching and not self._touching:       # the usual step: nothing touched, nothing was
+            return []
+        touching = set(touching)
         for name in self._touching:
             if sim.within(name, CONTACT_RELEASE_M):
                 touching.add(name)
