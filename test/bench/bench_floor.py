@@ -9,7 +9,9 @@ profile in ``empty``, in ``posts`` (208 thin posts) and in a BARN-method field (
 posts). Then an episode in the same world, as a sweep's worker runs it (the world loaded once): stop_on_obstacle
 in ``empty`` and ``posts``, avoid_obstacles to the goal in the BARN field. For each: the world's set-up (the
 simulation and its robot built), the episode's running cost per simulated second beside the floor (its CPU less
-the set-up), the whole episode's (set-up included), and its speed (simulated s per CPU s). Targets: at most 1.5x
+the set-up), the whole episode's (set-up included), and its speed (simulated s per CPU s); and the episode's loop
+timed against its own physics steps, side by side (``Clocked``), the ratio that holds when the host's speed
+drifts between one measurement and the next. Targets: at most 1.5x
 the floor with stop_on_obstacle in ``empty`` and ``posts``; set-up of the 300-post world under 20 ms; at least
 40x real time for the Jackal with avoid_obstacles among about 300 posts. Figures, not pass/fail.
 """
