@@ -10,6 +10,11 @@ import numpy as np
 
 # How long Xvfb may take to accept connections.
 XVFB_START_S = 10.0
+#: xwd reads every window on the screen; one closed while it reads (a program's splash screen giving way to its
+#: main window) makes it fail with one of these X errors. The dump is then taken again, up to XWD_ATTEMPTS times
+#: in all, XWD_RETRY_S apart.
+XWD_RACES = ('BadDrawable', 'BadWindow', 'BadMatch')
+XWD_ATTEMPTS, XWD_RETRY_S = 4, 0.25
 SCREEN_SIZE = (1280, 900)
 
 
@@ -61,11 +66,16 @@ class VirtualScreen:
         """The whole screen as an (h, w, 3) RGB uint8 array (via xwd, Debian package x11-apps)."""
         if shutil.which('xwd') is None:
             raise ScreenError('xwd is not installed (Debian package x11-apps)')
-        out = subprocess.run(['xwd', '-root', '-silent', '-display', self.display], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, timeout=30)
-        if out.returncode != 0:
-            raise ScreenError('xwd failed: %s' % out.stderr.decode(errors='replace').strip())
-        return xwd_to_rgb(out.stdout)
+        for attempt in range(1, XWD_ATTEMPTS + 1):
+            out = subprocess.run(['xwd', '-root', '-silent', '-display', self.display], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, timeout=30)
+            if out.returncode == 0:
+                return xwd_to_rgb(out.stdout)
+            error = out.stderr.decode(errors='replace').strip()
+            if not any(race in error for race in XWD_RACES):
+                break
+            time.sleep(XWD_RETRY_S)
+        raise ScreenError('xwd failed (attempt %d of %d): %s' % (attempt, XWD_ATTEMPTS, error))
 
 
 def xwd_to_rgb(data):

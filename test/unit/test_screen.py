@@ -1,9 +1,13 @@
-"""XWD screen dumps decode to the right RGB pixels for 24- and 32-bit layouts in either byte order."""
+"""XWD screen dumps decode to the right RGB pixels for 24- and 32-bit layouts in either byte order; a dump that
+races a window closing is taken again."""
+import os
+import shutil
+import stat
 import struct
 
 import pytest
 
-from closed_loop.screen import ScreenError, xwd_to_rgb
+from closed_loop.screen import XWD_ATTEMPTS, ScreenError, VirtualScreen, xwd_to_rgb
 
 PIXELS = [0x112233, 0x445566, 0x778899, 0xaabbcc]   # 0xRRGGBB, 2 x 2, row by row
 
@@ -35,3 +39,36 @@ def test_other_depths_are_refused_by_name():
     data[44:48] = struct.pack('>I', 16)
     with pytest.raises(ScreenError, match='16 bits'):
         xwd_to_rgb(bytes(data))
+
+
+def xwd_failing(folder, times, message):
+    """A folder holding an ``xwd`` that fails ``times`` times with ``message``, then runs the real one."""
+    real = shutil.which('xwd')
+    count = os.path.join(folder, 'count')
+    script = os.path.join(folder, 'xwd')
+    with open(script, 'w') as f:
+        f.write('#!/bin/sh\nn=$(cat %s 2>/dev/null || echo 0)\necho $((n + 1)) > %s\n'
+                'if [ "$n" -lt %d ]; then echo "%s" >&2; exit 1; fi\nexec %s "$@"\n'
+                % (count, count, times, message, real))
+    os.chmod(script, os.stat(script).st_mode | stat.S_IEXEC)
+    return count
+
+
+@pytest.mark.skipif(shutil.which('Xvfb') is None or shutil.which('xwd') is None, reason='needs Xvfb and xwd')
+def test_a_dump_that_races_a_closing_window_is_taken_again(tmp_path, monkeypatch):
+    race = 'X Error of failed request:  BadDrawable (invalid Pixmap or Window parameter)'
+    count = xwd_failing(str(tmp_path), 2, race)
+    monkeypatch.setenv('PATH', '%s:%s' % (tmp_path, os.environ['PATH']))
+    with VirtualScreen() as screen:
+        rgb = screen.screenshot()
+        assert rgb.shape == (screen.size[1], screen.size[0], 3)
+        assert open(count).read().strip() == '3'                  # two races, then the dump
+        os.remove(count)
+        xwd_failing(str(tmp_path), XWD_ATTEMPTS, race)
+        raced = r'attempt %d of %d\): X Error.*BadDrawable' % (XWD_ATTEMPTS, XWD_ATTEMPTS)
+        with pytest.raises(ScreenError, match=raced):
+            screen.screenshot()
+        os.remove(count)
+        xwd_failing(str(tmp_path), 1, 'xwd: unable to open display')
+        with pytest.raises(ScreenError, match=r'attempt 1 of %d\): xwd: unable to open display' % XWD_ATTEMPTS):
+            screen.screenshot()                                    # anything else is not taken again
