@@ -178,7 +178,8 @@ def main():
                       'target >= %.0fx real time' % TARGET_CLUTTER_SPEED if name == 'jackal' else '')
             print('  %-11s %-10s %3d obstacles  floor at rest %5.2f ms/s (%4.0fx), as driven %5.2f ms/s (replay %.0e m '
                   'off)  set-up %5.1f ms  %-16s running %6.2f ms/s = %5.2fx the floor as driven [%.2f-%.2f] (%5.2fx at '
-                  'rest), whole %5.2fx / %5.2fx; the loop %5.2fx its own steps [%.2f-%.2f]  %4.0fx real time  (%s, %.1f s)  %s'
+                  'rest), whole %5.2fx / %5.2fx; the loop %5.2fx its own steps [%.2f-%.2f]  %4.0fx real time  '
+                  '(%s, %.1f s)  %s'
                   % (name, world_name, len(world.obstacles), median(f['floor']) * 1e3, 1.0 / median(f['floor']),
                      median(f['driven']) * 1e3, apart, median(f['setup']) * 1e3, controller, median(running) * 1e3,
                      median(driven_ratio), min(driven_ratio), max(driven_ratio),

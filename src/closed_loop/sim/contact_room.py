@@ -47,7 +47,8 @@ class BodyExtent:
                 self._rigid.append(link)
                 self.reach_m = max(self.reach_m, _farthest(box, base))
                 continue
-            chain[link] = math.dist(origin, base) if rigid[parent] else chain[parent] + math.dist(origin, origins[parent])
+            chain[link] = (math.dist(origin, base) if rigid[parent]
+                           else chain[parent] + math.dist(origin, origins[parent]))
             self.reach_m = max(self.reach_m, chain[link] + _farthest(box, origin))
             self._turning.append((link, _farthest(box, origin) if rigid[parent] else None))
 
