@@ -64,6 +64,8 @@ class Scan:
 
 
 def _is_finite_number(value):
+    if type(value) is float:            # the usual case, without the abstract class's slower check
+        return math.isfinite(value)
     return (isinstance(value, numbers.Real) and not isinstance(value, bool)
             and math.isfinite(value))
 

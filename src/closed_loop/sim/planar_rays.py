@@ -50,6 +50,10 @@ class PlanarRays:
         self._x, self._y, self._z = (numpy.ascontiguousarray(self._at[:, i]) for i in range(3))
         self._spans = (float((self._z - self._half_height).max(initial=-numpy.inf)),
                        float((self._z + self._half_height).min(initial=numpy.inf)))
+        #: Rows: each obstacle's centre from the origin (x, y), its distance, its circle's radius (filled in by
+        #: each cast, the radius once), so the ones near are taken in one call.
+        self._seen = numpy.empty((4, len(chosen)))
+        self._seen[3] = self._radius
 
     def cast(self, centres, origin, dirs, range_max, cull=True, fan=None):
         """Distances (N,) from ``origin`` (x, y, z) along ``dirs`` ((N, 3) unit vectors, near the horizontal)
@@ -82,8 +86,9 @@ class PlanarRays:
         else:
             at = numpy.asarray(centres, float).reshape(-1, 3)[self._order]
             ax, ay, az = at[:, 0], at[:, 1], at[:, 2]
-        rel_x, rel_y = ax - x, ay - y
-        distance = numpy.hypot(rel_x, rel_y)
+        seen = self._seen
+        rel_x, rel_y, distance = numpy.subtract(ax, x, out=seen[0]), numpy.subtract(ay, y, out=seen[1]), seen[2]
+        numpy.hypot(rel_x, rel_y, out=distance)
         within = distance - self._radius <= range_max
         # Only obstacles whose height spans the scan's plane, give or take the drift (all of them, usually).
         spans_all = centres is None and self._spans[0] <= z - drift and z + drift <= self._spans[1]
@@ -94,15 +99,15 @@ class PlanarRays:
         if not len(near):
             best[best > range_max] = numpy.inf
             return best
-        rel_x, rel_y, distance = rel_x[near], rel_y[near], distance[near]
+        rel_x, rel_y, distance, radius = seen[:, near]
         if not cull:
             ray, obstacle = numpy.arange(count)[:, None], numpy.arange(len(near))[None, :]
         elif fan is not None:
-            ray, obstacle = _fan_pairs(fan, count, rel_x, rel_y, distance, self._radius[near], drift / range_max)
+            ray, obstacle = _fan_pairs(fan, count, rel_x, rel_y, distance, radius, drift / range_max)
         else:
             bearings = numpy.arctan2(fy, fx)
             order = numpy.argsort(bearings, kind='stable')
-            ray, obstacle = _sorted_pairs((bearings[order], order), rel_x, rel_y, distance, self._radius[near])
+            ray, obstacle = _sorted_pairs((bearings[order], order), rel_x, rel_y, distance, radius)
         # ``obstacle`` counts in ``near``, whose shapes come one after another; the pairs come obstacle by obstacle.
         parts = numpy.searchsorted(near, [g[1] for g in self._groups] + [len(self._radius)])
         high = not spans_all and (gap[near] + drift > self._half_height[near]).any()   # a ray may pass over one
@@ -154,16 +159,17 @@ def _fan_pairs(fan, count, rel_x, rel_y, distance, radius, stray=0.0):
     the first ray's bearing or a full turn beyond it, where the part on the other side is taken too. The pairs
     come obstacle by obstacle."""
     first, increment = fan
-    centre = numpy.mod(numpy.arctan2(rel_y, rel_x) - first, TWO_PI)       # from the first ray, [0, 2 pi)
+    centre = numpy.arctan2(rel_y, rel_x) - first                         # from the first ray
     half = _half_widths(distance, radius, stray)
     if abs(count * increment - TWO_PI) < 1e-9:
         # Ray indices: from ceil((centre - half) / increment) to floor((centre + half) / increment), at most a
-        # turn of them, each taken modulo the count.
+        # turn of them, each taken modulo the count (so the centre need not be within a turn of the first ray).
         start = numpy.ceil((centre - half) / increment)
         counts = numpy.minimum(numpy.floor((centre + half) / increment) - start + 1.0, count).astype(numpy.intp)
         ray, obstacle = _expand(start.astype(numpy.intp), counts)
         return numpy.mod(ray, count), obstacle
     half = numpy.repeat(half, 3)
+    centre = numpy.mod(centre, TWO_PI)                                    # [0, 2 pi) from the first ray
     centre = (centre[:, None] + _TURNS).ravel()                           # each window, a turn before and after
     # Ray indices: from ceil((centre - half) / increment), to floor((centre + half) / increment) inclusive.
     bounds = numpy.floor(numpy.stack((half - centre, centre + half)) / increment)

@@ -170,6 +170,7 @@ class Simulation:
         # Each obstacle's body, centre at rest and the radius of a circle round its footprint, for
         # obstacles_near, in the world's order; a mover's centre is read when asked.
         self._extent_uids = numpy.array([owners[o.name] for o in self.world.obstacles], dtype=numpy.int64)
+        self._extent_body_uids, self._extent_body = numpy.unique(self._extent_uids, return_inverse=True)
         self._extent_centres = numpy.array([o.position[:2] for o in self.world.obstacles], float).reshape(-1, 2)
         self._extent_radii = numpy.array([shapes.bounding_radius(o) for o in self.world.obstacles], float)
 
@@ -294,10 +295,12 @@ class Simulation:
                     centres[index] = self._call(pybullet.getBasePositionAndOrientation, int(uid))[0][:2]
         bounds = numpy.hypot(centres[:, 0] - x, centres[:, 1] - y) - self._extent_radii
         near = numpy.flatnonzero(bounds <= reach_m)
-        least = {}
-        for i in near[numpy.argsort(bounds[near], kind='stable')]:
-            least.setdefault(int(self._extent_uids[i]), float(bounds[i]))
-        return [(bound, uid) for uid, bound in least.items()]
+        if not len(near):
+            return []
+        least = numpy.full(len(self._extent_body_uids), numpy.inf)      # each body's nearest bound
+        numpy.minimum.at(least, self._extent_body[near], bounds[near])
+        order = numpy.argsort(least, kind='stable')[:len(near)]
+        return [(float(least[b]), int(self._extent_body_uids[b])) for b in order if least[b] <= reach_m]
 
     def nearest_obstacle_m(self, x, y, within_m):
         """A lower bound (m) on the distance across the ground from the point (x, y) to every obstacle's
