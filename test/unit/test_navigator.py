@@ -9,7 +9,7 @@ import pytest
 from closed_loop.control import navigator as navigator_module, wavefront
 from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, outline
 from closed_loop.control.guard import scan_points
-from closed_loop.control.local_planner import PREDICTION_STEP_S, NavigatorError, plan, predict, required_margin
+from closed_loop.control.local_planner import PREDICTION_STEP_S, NavigatorError, _pursue, plan, predict, required_margin
 from closed_loop.control.navigator import NavigatorSettings
 from closed_loop.geometry import Pose2D
 from closed_loop.robot_model import Footprint
@@ -92,6 +92,19 @@ def test_where_what_is_remembered_shuts_the_only_way_the_newest_scan_is_asked():
     closed = wall + [((1.5, 0.8), (1.5, 1.6))]
     p = plan(scan_of(segments=closed), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), NavigatorSettings(), remembered)
     assert p.way is None and p.aim_xy == (10.0, 0.0)
+
+
+def test_a_pursued_turn_goes_on_the_way_it_turned_while_the_aim_swings_to_the_other_side_behind():
+    # Seen in a BARN-method world: the aim swung from ahead-left to behind-right and back from one scan to the
+    # next, and the robot turned left, then right, then left, for a minute.
+    settings, none = NavigatorSettings(), numpy.zeros((0, 2))
+    behind_right = (-0.6, -0.2)
+    v, w = _pursue(behind_right, none, FOOTPRINT, 0.0, 0.0, settings, 20)[:2]
+    assert v == 0.0 and w < 0                               # alone: toward it, to the right
+    v, w = _pursue(behind_right, none, FOOTPRINT, 0.0, 0.0, settings, 20, turning=1.0)[:2]
+    assert v == 0.0 and w > 0                               # after a turn to the left: on to the left
+    v, w = _pursue((0.5, -0.3), none, FOOTPRINT, 0.0, 0.0, settings, 20, turning=1.0)[:2]
+    assert v == 0.0 and w < 0                               # a little to the right (0.54 rad): toward it
 
 
 def test_boxed_in_gives_zero():

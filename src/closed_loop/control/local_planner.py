@@ -63,6 +63,7 @@ BLOCKED_STOP_M = 0.3
 #: PURSUIT_TURN_RAD to a side (at the first of PURSUIT_TURN_RADPS that keeps the margin), else drive an arc
 #: through it at the first of PURSUIT_SPEEDS (x max_speed) that does.
 PURSUIT_TURN_RAD = 0.3
+PURSUIT_KEEP_RAD = 1.5
 PURSUIT_TURN_RADPS = (0.8, 0.4)
 PURSUIT_SPEEDS = (0.5, 0.25, 0.125)
 #: Candidates per axis of the window.
@@ -137,14 +138,17 @@ def candidate_speeds(max_speed, max_yaw_rate):
     return v, w
 
 
-def _pursue(aim_xy, near, footprint, v0, w0, s, steps):
+def _pursue(aim_xy, near, footprint, v0, w0, s, steps, turning=0.0):
     """Toward ``aim_xy`` (the robot's frame) along the way, heading first: a turn in place while it lies more
     than PURSUIT_TURN_RAD to a side, else an arc through it at the fastest of PURSUIT_SPEEDS (x
     ``max_speed``) whose path keeps the margin, judged exactly; (v, w, predicted poses, their clearance, why),
-    or None when none keeps it."""
+    or None when none keeps it. ``turning``: the side (+1 left, -1 right) of a turn in place at the last
+    decision, which goes on while the aim lies more than PURSUIT_KEEP_RAD to the other side (an aim that
+    swings between ahead and behind from one scan to the next would turn the robot back and forth)."""
     distance, bearing = math.hypot(*aim_xy), math.atan2(aim_xy[1], aim_xy[0])
     if abs(bearing) > PURSUIT_TURN_RAD:
-        options = [(0.0, math.copysign(min(s.max_yaw_rate, rate), bearing)) for rate in PURSUIT_TURN_RADPS]
+        side = turning if turning and abs(bearing) > PURSUIT_KEEP_RAD else math.copysign(1.0, bearing)
+        options = [(0.0, side * min(s.max_yaw_rate, rate)) for rate in PURSUIT_TURN_RADPS]
         why = 'turning in place toward the way round (%.2f rad off)' % bearing
     else:
         curvature = 2.0 * aim_xy[1] / max(distance ** 2, 1e-9)
@@ -362,7 +366,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     if follow and v[best] == 0.0 and way is not None and now >= s.safety_margin:
         # The window would stand or turn in place, yet a way is there: follow it, heading first (a narrow gap
         # scores low on room for every arc through it, however the way leads there).
-        followed = _pursue(aim_xy, near, footprint, v0, w0, s, safe_steps)
+        followed = _pursue(aim_xy, near, footprint, v0, w0, s, safe_steps, turning)
     # What is sent is one period's step toward the target (step_toward).
     period_s = 1.0 / s.rate_hz
     prev_v, prev_w = (None, None) if previous is None else previous
