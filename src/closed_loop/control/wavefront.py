@@ -222,16 +222,18 @@ def _descend(steps, start, goal_cell, limit_m=math.inf, keep=None):
     the steps down, the one nearest to the goal in a straight line is taken, so in the open the way is on
     the goal's line."""
     rows, cols = steps.shape
+    grid = steps.tolist()          # plain ints: a walk of a few dozen cells reads them faster than numpy
     i, j = start
     gi, gj = goal_cell
     travelled = 0.0
     cells = [start]
-    while steps[i, j] > 0 and travelled < limit_m:
+    here = grid[i][j]
+    while here > 0 and travelled < limit_m:
         best = None
         for di, dj in _NEIGHBOURS:
             ni, nj = i + di, j + dj
-            if 0 <= ni < rows and 0 <= nj < cols and steps[ni, nj] < steps[i, j]:
-                key = (steps[ni, nj], (gi - ni) ** 2 + (gj - nj) ** 2)
+            if 0 <= ni < rows and 0 <= nj < cols and grid[ni][nj] < here:
+                key = (grid[ni][nj], (gi - ni) ** 2 + (gj - nj) ** 2)
                 if best is None or key < best[0]:
                     best = (key, ni, nj)
         if best is None:
@@ -242,6 +244,7 @@ def _descend(steps, start, goal_cell, limit_m=math.inf, keep=None):
         if keep is not None and not keep((i, j)):
             break
         cells.append((i, j))
+        here = grid[i][j]
     return cells
 
 
