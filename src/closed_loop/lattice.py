@@ -18,6 +18,8 @@ So it passes a gap narrower than its turning circle, aligned first, and turns on
 of ROS; numpy and OpenCV.
 """
 import collections
+import functools
+import heapq
 import math
 
 import cv2
@@ -30,9 +32,11 @@ STEPS = ((0, 1), (1, 1), (1, 0), (1, -1), (0, -1), (-1, -1), (-1, 0), (-1, 1))
 SWEEP_STEP_RAD = math.radians(3.0)
 
 
+@functools.lru_cache(maxsize=256)
 def _kernel(cell_m, rect, radius_m, angles):
     """uint8 kernel and anchor (x, y) of the offsets whose cell centre comes within ``radius_m`` of the
-    rectangle ``rect`` (x_min, x_max, y_min, y_max, m, in the robot's frame) at any of ``angles``."""
+    rectangle ``rect`` (x_min, x_max, y_min, y_max, m, in the robot's frame) at any of ``angles`` (a tuple);
+    made once for given values (a world generator builds a lattice for each field it draws), read-only."""
     reach = math.hypot(max(-rect[0], rect[1]), max(-rect[2], rect[3])) + radius_m
     n = int(math.ceil(reach / cell_m)) + 1
     offsets = numpy.arange(-n, n + 1) * cell_m
@@ -44,7 +48,9 @@ def _kernel(cell_m, rect, radius_m, angles):
         gx = numpy.maximum(numpy.maximum(rect[0] - lx, lx - rect[1]), 0.0)
         gy = numpy.maximum(numpy.maximum(rect[2] - ly, ly - rect[3]), 0.0)
         inside |= numpy.hypot(gx, gy) <= radius_m
-    return inside.astype(numpy.uint8), (n, n)
+    kernel = inside.astype(numpy.uint8)
+    kernel.flags.writeable = False
+    return kernel, (n, n)
 
 
 def _shift(array, di, dj):
@@ -73,7 +79,7 @@ class FootprintLattice:
         self.shape = grid.shape
 
         def blocked(angles):
-            kernel, anchor = _kernel(cell_m, rect, obstacle_radius_m, angles)
+            kernel, anchor = _kernel(cell_m, rect, obstacle_radius_m, tuple(float(a) for a in angles))
             # dilate: out(c) = max over the kernel's offsets o of grid(c + o), the grid read as if outside
             # were open; the world's own walls close what must be closed.
             return cv2.dilate(grid, kernel, anchor=anchor, borderType=cv2.BORDER_CONSTANT, borderValue=0) > 0
@@ -111,34 +117,54 @@ class FootprintLattice:
 
     def shortest(self, start, goal):
         """(length m, [(row, column, heading), ...]) of the shortest way, by distance travelled (turning in place
-        costs none), from ``start`` to a ``goal`` cell; (inf, []) when there is none."""
+        costs none), from ``start`` to a ``goal`` cell; (inf, []) when there is none.
+
+        A* over the states, toward a lower bound on the way left (the straight line to the nearest goal cell), and
+        on until every state no farther than the shortest way is settled: the costs the walk back reads are then
+        those of a relaxation to convergence over every state, to the bit (each state's least sum of steps,
+        added along its way), at a small part of the cost."""
         i, j, k = start
-        inf = numpy.inf
-        cost = numpy.full(self.free.shape, inf)
-        if not self.free[k, i, j]:
+        inf = math.inf
+        goal = numpy.asarray(goal, bool)
+        if not self.free[k, i, j] or not goal.any():
             return inf, []
-        cost[k, i, j] = 0.0
         lengths = [self.cell_m * math.hypot(di, dj) for di, dj in STEPS]
-        blocked = ~self.free
-        while True:
-            before = cost
-            cost = cost.copy()
-            for turn in range(HEADINGS // 2):              # a turn costs nothing: close over turns first
-                left = numpy.where(self.turn, cost, inf)
-                cost = numpy.minimum(cost, numpy.roll(left, 1, axis=0))
-                cost = numpy.minimum(cost, numpy.where(self.turn, numpy.roll(cost, -1, axis=0), inf))
-            for h, (di, dj) in enumerate(STEPS):
-                layer = cost[h]
-                moved = numpy.minimum(_shift_float(layer, di, dj), _shift_float(layer, -di, -dj)) + lengths[h]
-                cost[h] = numpy.minimum(layer, moved)
-            cost[blocked] = inf
-            if numpy.array_equal(cost, before):
+        # Shaded down a little, so that rounding never lifts the bound above a real way's length.
+        left = (cv2.distanceTransform((~goal).astype(numpy.uint8), cv2.DIST_L2, cv2.DIST_MASK_PRECISE)
+                * (self.cell_m * 0.999)).astype(float).tolist()
+        free, turn, at_goal = self.free.tolist(), self.turn.tolist(), goal.tolist()
+        rows, cols = self.shape
+        settled = {(k, i, j): 0.0}
+        heap = [(left[i][j], 0.0, k, i, j)]
+        best = inf
+        while heap:
+            bound, cost, k, i, j = heapq.heappop(heap)
+            if bound > best:
                 break
-        at_goal = numpy.where(numpy.asarray(goal, bool)[None], cost, inf)
-        best = numpy.unravel_index(int(numpy.argmin(at_goal)), cost.shape)
-        if not numpy.isfinite(at_goal[best]):
+            if cost > settled[(k, i, j)]:
+                continue
+            if at_goal[i][j] and cost < best:
+                best = cost
+            di, dj = STEPS[k]
+            up, down = (k + 1) % HEADINGS, (k - 1) % HEADINGS
+            moves = [(cost + lengths[k], k, ni, nj) for ni, nj in ((i + di, j + dj), (i - di, j - dj))
+                     if 0 <= ni < rows and 0 <= nj < cols and free[k][ni][nj]]
+            if turn[k][i][j] and free[up][i][j]:
+                moves.append((cost, up, i, j))
+            if turn[down][i][j] and free[down][i][j]:
+                moves.append((cost, down, i, j))
+            for then, nk, ni, nj in moves:
+                if then < settled.get((nk, ni, nj), inf):
+                    settled[(nk, ni, nj)] = then
+                    heapq.heappush(heap, (then + left[ni][nj], then, nk, ni, nj))
+        costs = numpy.full(self.free.shape, inf)
+        for state, cost in settled.items():
+            costs[state] = cost
+        ends = numpy.where(goal[None], costs, inf)
+        end = numpy.unravel_index(int(numpy.argmin(ends)), costs.shape)
+        if not numpy.isfinite(ends[end]):
             return inf, []
-        return float(at_goal[best]), self._walk_back(cost, best, (k, i, j), lengths)
+        return float(ends[end]), self._walk_back(costs, end, (start[2], start[0], start[1]), lengths)
 
     def _walk_back(self, cost, end, start, lengths):
         """The states from ``start`` to ``end`` ((heading, row, column)), down ``cost``: at each cell, the turns in
@@ -183,12 +209,3 @@ class FootprintLattice:
             path.append(step)
             k, i, j = step
         return [(i, j, k) for k, i, j in reversed(path)]
-
-
-def _shift_float(array, di, dj):
-    """As :func:`_shift` for costs: inf where nothing moved in."""
-    out = numpy.full_like(array, numpy.inf)
-    h, w = array.shape
-    out[max(di, 0):h + min(di, 0), max(dj, 0):w + min(dj, 0)] = \
-        array[max(-di, 0):h + min(-di, 0), max(-dj, 0):w + min(-dj, 0)]
-    return out

@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, load_episode_world
-from closed_loop.lattice import FootprintLattice
+from closed_loop.lattice import STEPS, FootprintLattice
 from closed_loop.sim import barn, barn_metrics, generators
 from closed_loop.sim.planar_rays import PlanarRays
 from closed_loop.sim.profiles import load_profile
@@ -77,6 +77,58 @@ def test_the_shortest_way_goes_round_a_block_and_is_no_shorter_than_the_straight
     open_length, _ = lattice(numpy.zeros((100, 200), bool)).shortest((50, 10, 0), goal)
     assert open_length == pytest.approx(180 * CELL)
     assert lattice(grid).shortest((50, 10, 0), numpy.zeros((100, 200), bool)) == (math.inf, [])
+
+
+def relaxed_lengths(here, start):
+    """Every state's shortest way from ``start`` by plain relaxation to convergence over all states (the
+    reference): {(row, column, heading): m}."""
+    rows, cols = here.shape
+    cost = {start: 0.0}
+    changed = True
+    while changed:
+        changed = False
+        for (i, j, k), c in list(cost.items()):
+            di, dj = STEPS[k]
+            step = c + here.cell_m * math.hypot(di, dj)
+            nexts = [(ni, nj, k, step) for ni, nj in ((i + di, j + dj), (i - di, j - dj))
+                     if 0 <= ni < rows and 0 <= nj < cols and here.free[k, ni, nj]]
+            nexts += [(i, j, (k + 1) % 8, c)] if here.turn[k, i, j] else []
+            nexts += [(i, j, (k - 1) % 8, c)] if here.turn[(k - 1) % 8, i, j] else []
+            for ni, nj, nk, then in nexts:
+                if here.free[nk, ni, nj] and then < cost.get((ni, nj, nk), math.inf):
+                    cost[(ni, nj, nk)] = then
+                    changed = True
+    return cost
+
+
+@pytest.mark.parametrize('seed', [0, 2, 3, 6])       # 6: no way
+def test_the_shortest_way_is_the_relaxed_one_to_the_bit_and_a_real_way_of_that_length(seed):
+    rng = numpy.random.default_rng(seed)
+    grid = numpy.zeros((30, 50), bool)
+    for _ in range(2 + seed % 4):                              # blocks between the start and the goal cells
+        i, j = rng.integers(0, 26), rng.integers(14, 44)
+        grid[i:i + rng.integers(2, 12), j:j + rng.integers(2, 6)] = True
+    goal = numpy.zeros(grid.shape, bool)
+    goal[rng.integers(5, 25, 3), rng.integers(44, 50, 3)] = True
+    here = lattice(grid)
+    start = (15, 7, seed % 8)
+    length, path = here.shortest(start, goal)
+    reference = relaxed_lengths(here, start)
+    least = min([c for (i, j, _), c in reference.items() if goal[i, j]], default=math.inf)
+    assert length == least                                     # to the bit
+    if math.isinf(least):
+        assert path == []
+        return
+    assert path[0] == start and goal[path[-1][:2]]
+    walked = 0.0
+    for (i, j, k), (ni, nj, nk) in zip(path, path[1:]):
+        assert here.free[nk, ni, nj]
+        if (i, j) == (ni, nj):                                 # a turn in place, where its sweep is free
+            assert here.turn[k, i, j] if nk == (k + 1) % 8 else (nk == (k - 1) % 8 and here.turn[nk, i, j])
+        else:                                                  # a step along the heading, forward or back
+            assert nk == k and (ni - i, nj - j) in (STEPS[k], (-STEPS[k][0], -STEPS[k][1]))
+            walked += CELL * math.hypot(ni - i, nj - j)
+    assert walked == pytest.approx(length, abs=1e-9)
 
 
 def barn_settings(**values):
