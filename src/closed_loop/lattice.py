@@ -104,10 +104,15 @@ class FootprintLattice:
         i, j, k = start
         if not self.free[k, i, j]:
             return False
+        goal = numpy.asarray(goal, bool)
+        # Every move joins 8-neighbour cells free at some heading, so where no 8-connected chain of such cells joins
+        # the start to a goal cell there is no way (one call; most fields a generator draws again end here).
+        labels = cv2.connectedComponents(self.free.any(axis=0).astype(numpy.uint8), connectivity=8)[1]
+        if not (labels[goal] == labels[i, j]).any():
+            return False
         reached = numpy.zeros(self.free.shape, bool)
         reached[k, i, j] = True
         front = reached
-        goal = numpy.asarray(goal, bool)
         while front.any():
             if (reached & goal[None]).any():
                 return True

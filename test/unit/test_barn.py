@@ -101,8 +101,21 @@ def relaxed_lengths(here, start):
     return cost
 
 
+def test_a_diagonal_corridor_the_robot_fits_only_cell_by_cell_on_its_diagonal_is_a_way():
+    ii, jj = numpy.mgrid[0:60, 0:60]
+    grid = numpy.abs(ii - jj) >= 7                             # walls along a 45-degree corridor
+    here = lattice(grid)
+    free = here.free.any(axis=0)
+    assert free[20, 20] and free[21, 21] and not free[20, 21] and not free[21, 20]    # joined corner to corner
+    goal = numpy.zeros(grid.shape, bool)
+    goal[50, 50] = True
+    assert here.reachable((10, 10, 1), goal)
+    assert here.shortest((10, 10, 1), goal)[0] == pytest.approx(40 * CELL * math.sqrt(2))
+
+
 @pytest.mark.parametrize('seed', [0, 2, 3, 6])       # 6: no way
 def test_the_shortest_way_is_the_relaxed_one_to_the_bit_and_a_real_way_of_that_length(seed):
+    """(And reachable says so exactly where the relaxation reaches a goal cell.)"""
     rng = numpy.random.default_rng(seed)
     grid = numpy.zeros((30, 50), bool)
     for _ in range(2 + seed % 4):                              # blocks between the start and the goal cells
@@ -116,6 +129,7 @@ def test_the_shortest_way_is_the_relaxed_one_to_the_bit_and_a_real_way_of_that_l
     reference = relaxed_lengths(here, start)
     least = min([c for (i, j, _), c in reference.items() if goal[i, j]], default=math.inf)
     assert length == least                                     # to the bit
+    assert here.reachable(start, goal) == math.isfinite(least)
     if math.isinf(least):
         assert path == []
         return

@@ -120,8 +120,12 @@ class Layout:
     def occupancy(self, field):
         """(rows, cols) bool: the lattice cells holding a post's centre."""
         grid = numpy.zeros((self.rows, self.cols), bool)
-        for r, c in zip(*numpy.nonzero(field)):
-            grid[self.lattice_cell(*self.post_centre(r, c))] = True
+        rows, columns = numpy.nonzero(field)
+        # post_centre and lattice_cell for every post at once (numpy rounds halves to even, as round does).
+        x = self.field_start + (rows + 0.5) * self.settings.cell_m
+        y = -self.half_width + (columns + 0.5) * self.settings.cell_m
+        grid[numpy.round(y / self.step).astype(numpy.intp) + self.i0,
+             numpy.round(x / self.step).astype(numpy.intp) + self.j0] = True
         return grid
 
     def lattice(self, field, profile):
