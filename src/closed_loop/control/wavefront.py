@@ -168,10 +168,11 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None, kept=
     # Down the wave from the start, aim_m of path. The aim is the farthest point of the way in sight of the
     # start through passable cells: steering for a point beyond a bend would cut the corner into what the
     # way goes round.
+    steps = steps.tolist()          # plain ints, read once: a walk of a few dozen cells reads them faster than numpy
     cells = _descend(steps, start, goal_cell, aim_m, lambda cell: _in_sight(in_sight, start, cell))
     centre = (lambda cell: (x0 + (cell[1] + 0.5) * CELL_M, y0 + (cell[0] + 0.5) * CELL_M))
     route = (lambda: _route([centre(cell) for cell in _descend(steps, start, goal_cell)], goal))
-    if steps[cells[-1]] == 0:
+    if steps[cells[-1][0]][cells[-1][1]] == 0:
         return Way(tuple(goal), tuple(goal), route)
     return Way(centre(cells[-1]), tuple(goal), route)
 
@@ -217,12 +218,12 @@ def _route(points, goal):
 
 
 def _descend(steps, start, goal_cell, limit_m=math.inf, keep=None):
-    """The cells down the wave from ``start``: to the goal's, or until ``limit_m`` of way or the first cell
-    for which ``keep`` (if given) is False (that cell left out). Many ways are equally short on a grid; of
-    the steps down, the one nearest to the goal in a straight line is taken, so in the open the way is on
-    the goal's line."""
-    rows, cols = steps.shape
-    grid = steps.tolist()          # plain ints: a walk of a few dozen cells reads them faster than numpy
+    """The cells down the wave ``steps`` (rows of ints) from ``start``: to the goal's, or until ``limit_m`` of way
+    or the first cell for which ``keep`` (if given) is False (that cell left out). Many ways are equally short on
+    a grid; of the steps down, the one nearest to the goal in a straight line is taken, so in the open the way
+    is on the goal's line."""
+    grid = steps
+    rows, cols = len(grid), len(grid[0])
     i, j = start
     gi, gj = goal_cell
     travelled = 0.0
