@@ -151,6 +151,10 @@ class Judge:
         self._rest_pose = None       # (x, y) where it came to rest, while it is at rest
         self._rest_end = False       # ended by resting (not by time or contact)
 
+    def due_from(self):
+        """The simulated time (s) from which :meth:`due` is true (inf once the scenario is over)."""
+        return math.inf if self.ended else self._next_s - 1e-9
+
     def due(self, t_s):
         """True when ground truth at ``t_s`` is to be observed (every ``period`` s of simulated time)."""
         return not self.ended and t_s >= self._next_s - 1e-9

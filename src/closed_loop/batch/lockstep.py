@@ -114,44 +114,61 @@ def _loop(spec, rig, controller, judge, tap):
     pending = []                      # (step, command), in order
     command = (0.0, 0.0)
     last = int(round(spec.time_limit_s / dt))
+    # The steps at which the LIDAR, the controller's timer and the camera are next due; between them, and the
+    # judge's instants and the commands' arrivals, a step is the physics and the contact check alone.
+    never = last + 1
+    next_scan, next_tick = 0, phase
+    next_frame = frame_phase if camera is not None else never
+    next_event = min(next_scan, next_tick, next_frame)
+    judge_from = judge.due_from()
+    apply_at = never
+    stepped = tap.stepped if type(tap).stepped is not Tap.stepped else None
     for k in range(last + 1):
         now = sim.time_s
-        sent = odom = None
-        scan_due, frame_due = k % steps_per_scan == 0, camera is not None and k % steps_per_frame == frame_phase
-        tick_due = k % steps_per_tick == phase
-        if scan_due or frame_due or tick_due:
+        sent = None
+        if k == next_event:
+            scan_due, frame_due, tick_due = k == next_scan, k == next_frame, k == next_tick
             odo = sim.odometry
             odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
-        if scan_due:
-            scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
-                        lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
-            tap.scan(now, scan.ranges)
-            sent = controller.on_scan(now, scan, odom)
-        if frame_due:
-            # What vision_node does in the graph: a red_centroid only for a frame with red in it.
-            rgb = camera.sample(sim)
-            tap.frame(now, rgb)
-            found = detect_red(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), vision)
-            if found.detected:
-                controller.on_detection(found.centroid_px[0], now, odom)
-        if tick_due:
-            sent = controller.on_tick(now, odom)
-        if scan_due or frame_due or tick_due:
+            if scan_due:
+                next_scan += steps_per_scan
+                scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
+                            lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
+                tap.scan(now, scan.ranges)
+                sent = controller.on_scan(now, scan, odom)
+            if frame_due:
+                next_frame += steps_per_frame
+                # What vision_node does in the graph: a red_centroid only for a frame with red in it.
+                rgb = camera.sample(sim)
+                tap.frame(now, rgb)
+                found = detect_red(cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR), vision)
+                if found.detected:
+                    controller.on_detection(found.centroid_px[0], now, odom)
+            if tick_due:
+                next_tick += steps_per_tick
+                sent = controller.on_tick(now, odom)
+            next_event = min(next_scan, next_tick, next_frame)
             tap.decided(now)
             controller.take_transitions()       # what the node logs; an episode keeps only the mode
-        if (judge.due(now) or k == last) and _judge(sim, judge, now, command, controller.mode, lookout):
-            return
+        if now >= judge_from or k == last:
+            if _judge(sim, judge, now, command, controller.mode, lookout):
+                return
+            judge_from = judge.due_from()
         if sent is not None:
             pending.append((k + delay, validate_command(*sent)))
             tap.command(now, pending[-1][1])
-        while pending and pending[0][0] <= k:
-            _, cmd = pending.pop(0)
-            command = (cmd.linear_x, cmd.angular_z)
-            sim.command(cmd)
-            judge.on_command()
+            apply_at = pending[0][0]
+        if k >= apply_at:
+            while pending and pending[0][0] <= k:
+                _, cmd = pending.pop(0)
+                command = (cmd.linear_x, cmd.angular_z)
+                sim.command(cmd)
+                judge.on_command()
+            apply_at = pending[0][0] if pending else never
         sim.step()
         began = contacts.sample(sim)
-        tap.stepped(sim.time_s, began)
+        if stepped is not None:
+            stepped(sim.time_s, began)
         if began:
             judge.on_contact(sim.time_s, len(began), began, _pose(sim) if judge.contact_log is not None else None)
             if judge.ended:

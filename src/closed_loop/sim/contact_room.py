@@ -85,6 +85,7 @@ class ContactRoom:
     def __init__(self, nearest, body):
         self._nearest = nearest
         self._body = body
+        self._reach_m = body.reach_m
         self._anchor = None          # (position, orientation, room m) where the room was last measured
 
     def forget(self):
@@ -93,8 +94,10 @@ class ContactRoom:
 
     def clear(self, position, orientation):
         if self._anchor is not None:
-            at, turned_from, room = self._anchor
-            moved = math.dist(position, at) + turn_rad(turned_from, orientation) * self._body.reach_m
+            at, q0, room = self._anchor
+            # turn_rad inline: this runs at every physics step.
+            dot = abs(q0[0] * orientation[0] + q0[1] * orientation[1] + q0[2] * orientation[2] + q0[3] * orientation[3])
+            moved = math.dist(position, at) + 2.0 * math.acos(min(1.0, dot)) * self._reach_m
             if moved < room:
                 return True
             if room <= 0.0 and moved < REMEASURE_M:

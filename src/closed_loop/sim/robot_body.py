@@ -217,7 +217,8 @@ class Robot:
         if self._room is None:
             self._room = False if self.sim.has_moving_obstacles or len(self.sim.robots) > 1 else ContactRoom(
                 self.sim.nearest_obstacle_m, BodyExtent(self._call, pybullet, self.robot_id, len(self._joints)))
-        if self._room and self._room.clear(*self._call(pybullet.getBasePositionAndOrientation, self.robot_id)):
+        if self._room and self._room.clear(*pybullet.getBasePositionAndOrientation(
+                self.robot_id, physicsClientId=self.sim.client)):
             return set()
         ground = self.sim.ground_id
         return {self.sim.name_at(c[2], c[6]) for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id)

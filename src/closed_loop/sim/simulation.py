@@ -135,6 +135,11 @@ class Simulation:
     def _call(self, fn, *args, **kwargs):
         return fn(*args, physicsClientId=self._client, **kwargs)
 
+    @property
+    def client(self):
+        """The pybullet client id (for a call made at every physics step, without :meth:`_call`'s wrapping)."""
+        return self._client
+
     def _build(self):
         p = pybullet
         self._call(p.resetSimulation)
