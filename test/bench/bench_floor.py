@@ -11,7 +11,8 @@ in ``empty`` and ``posts``, avoid_obstacles to the goal in the BARN field. For e
 simulation and its robot built), the episode's running cost per simulated second beside the floor (its CPU less
 the set-up), the whole episode's (set-up included), and its speed (simulated s per CPU s); and the episode's loop
 timed against its own physics steps, side by side (``Clocked``), the ratio that holds when the host's speed
-drifts between one measurement and the next. Targets: at most 1.5x
+drifts between one measurement and the next; and, in runs of their own, where the loop's CPU beside its steps
+goes (``Parts``: the LIDAR, the controller, the judge, the contact check, the rest). Targets: at most 1.5x
 the floor with stop_on_obstacle in ``empty`` and ``posts``; set-up of the 300-post world under 20 ms; at least
 40x real time for the Jackal with avoid_obstacles among about 300 posts. Figures, not pass/fail.
 """
@@ -27,6 +28,8 @@ from closed_loop.batch.episode import EpisodeSpec, load_episode_world, prepare, 
 from closed_loop.batch.lockstep import Tap, command_delay_steps  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 from closed_loop.sim.rig import Rig  # noqa: E402
+from closed_loop.sim.sensors.contacts import Contacts  # noqa: E402
+from closed_loop.sim.sensors.lidar import Lidar  # noqa: E402
 
 PROFILES = ('closed_loop', 'burger', 'jackal')
 BARN = {'generator': {'method': 'barn', 'seed': 2, 'fill': 0.45, 'smoothing': 2}}
@@ -91,6 +94,43 @@ class Clocked(Tap):
         return (self.last - self.started) / self.step_s
 
 
+class Parts(Clocked):
+    """As :class:`Clocked`, and where the rest goes: the LIDAR's scans, the controller's calls, the judge's look at
+    ground truth (its pose, speeds and clearance) and the contact check after each step, each timed where it is
+    called (their clock reads, four a step more than :class:`Clocked`'s, fall in "the rest"). Run apart from the
+    ratio's own runs, which have no such reads."""
+
+    PARTS = ('LIDAR', 'controller', 'judge', 'contacts')
+
+    def begin(self, rig, controller, judge):
+        Clocked.begin(self, rig, controller, judge)
+        self.spent = dict.fromkeys(self.PARTS, 0.0)
+        robot = rig.sim.robots[0]
+        for part, owner, names in (('LIDAR', rig.sensors[Lidar], ('sample',)),
+                                   ('controller', controller, ('on_scan', 'on_tick', 'on_detection')),
+                                   ('judge', robot, ('ground_truth', 'clearance')), ('judge', judge, ('observe',)),
+                                   ('contacts', rig.sensors[Contacts], ('sample',))):
+            for name in names:
+                setattr(owner, name, self._timed(part, getattr(owner, name)))
+
+    def _timed(self, part, call):
+        clock, spent = time.process_time, self.spent
+
+        def timed(*args, **kwargs):
+            started = clock()
+            try:
+                return call(*args, **kwargs)
+            finally:
+                spent[part] += clock() - started
+        return timed
+
+    def shares(self):
+        """{part: its CPU over the steps'}, and 'the rest' (the loop's own lines and the clock's reads)."""
+        shares = {part: spent / self.step_s for part, spent in self.spent.items()}
+        shares['the rest'] = self.ratio() - 1.0 - sum(shares.values())
+        return shares
+
+
 def driven_floor(spec, cache, commands, simulated_s):
     """(CPU s per simulated s of the step alone; metres between the replay's end and the episode's): the
     episode's physics again, its commands replayed open loop at the steps they reached the wheels, no sensor
@@ -149,6 +189,11 @@ def measure(spec, world, profile):
         for tap in clocked:
             run_episode(spec, cache, tap=tap)
         figures['in place'].append(median([tap.ratio() for tap in clocked]))
+    parts = [Parts() for _ in range(times)]
+    for tap in parts:
+        run_episode(spec, cache, tap=tap)
+    figures['parts runs'] = times
+    figures['parts'] = {name: median([tap.shares()[name] for tap in parts]) for name in parts[0].shares()}
     apart = math.hypot(end[0] - result.final_pose[0], end[1] - result.final_pose[1])
     return figures, result, ran, apart
 
@@ -188,6 +233,8 @@ def main():
                      median([w / ran / d for w, d in zip(f['whole'], f['floor'])]),
                      median(f['in place']), min(f['in place']), max(f['in place']),
                      median([ran / w for w in f['whole']]), result.outcome, ran, target))
+            print('  %-11s %-10s where the loop goes, in its steps\' CPU (the median of %d runs): steps 1, %s'
+                  % ('', '', f['parts runs'], ', '.join('%s %.3f' % kv for kv in f['parts'].items())))
 
 
 if __name__ == '__main__':
