@@ -157,3 +157,17 @@ def test_a_robot_no_command_has_reached_yet_is_not_stopped_before_the_first_comm
     silent = drive(Judge(JudgeSettings(first_command_wait=3.0)), [(0.0, 0.0, None, None)] * 60)
     assert silent.outcome == 'stopped' and silent.why.endswith('no command ever reached the base')
     assert silent.time_s == 0.0            # at rest from the start: the wait delays the verdict, not its time
+
+
+def test_due_from_is_where_due_turns_true_and_never_once_it_is_over():
+    judge = Judge(JudgeSettings(period=0.1, time_limit=0.35))
+    t, seen = 0.0, 0
+    while not judge.ended:
+        # Simulated time as a loop adds it, step by step (not exact multiples of the period).
+        assert judge.due(t) == (t >= judge.due_from())
+        if judge.due(t):
+            seen += 1
+            judge.observe(t, 0.0, 0.0, 0.0, 0.5, 0.0, (0.5, 0.0))
+            assert judge.due_from() > t and not judge.due(t)
+        t += 0.01
+    assert seen == 5 and judge.due_from() == math.inf and not judge.due(1e9)
