@@ -47,7 +47,10 @@ def keep_every(subscriber):
 
     On simulated time rospy subscribes to ``/clock`` itself with ``queue_size=1``, in the same subscription
     as ours, and a connection keeps the queue size it was made with: a recorder slowed by a loaded machine
-    read several clock messages at once and kept only the last (a bag began at 0.06 s, not 0)."""
+    read several clock messages at once and kept only the last (a bag began at 0.06 s, not 0). A connection
+    that rospy was still making when this was first called was made with a queue of 1 and joins the
+    subscription afterwards, so it is called again at every look at the graph (a bag held back 1.5 s at the
+    start began at 1.68 s)."""
     subscriber.impl.set_queue_size(-1)
     for connection in list(subscriber.impl.connections):
         connection.protocol.queue_size = None
@@ -101,9 +104,9 @@ class ScenarioRecorder:
             return
         for topic, nodes in published:
             if topic not in self.subscribers and topic not in LEFT_OUT and set(nodes) - {me}:
-                self.subscribers[topic] = sub = rospy.Subscriber(topic, rospy.AnyMsg, self.on_message, topic)
-                if topic == '/clock':
-                    keep_every(sub)
+                self.subscribers[topic] = rospy.Subscriber(topic, rospy.AnyMsg, self.on_message, topic)
+        if '/clock' in self.subscribers:
+            keep_every(self.subscribers['/clock'])
         if self.ready is None and '/clock' in self.subscribers and all(
                 sub.get_num_connections() > 0 for sub in self.subscribers.values()):
             rospy.loginfo('recording %d topics into %s', len(self.subscribers), self.path)
