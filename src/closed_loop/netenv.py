@@ -83,12 +83,17 @@ class _BoundedTransport(xmlrpc.client.Transport):
         return connection
 
 
+def bounded_proxy(uri, timeout_s):
+    """An XML-RPC proxy to ``uri`` (a master's or a node's API) whose calls give up after ``timeout_s`` s."""
+    return xmlrpc.client.ServerProxy(uri, transport=_BoundedTransport(timeout_s))
+
+
 def master_pid(uri, timeout_s=2.0):
     """The pid of the ROS master answering at ``uri``, or None where none does within ``timeout_s`` s: nothing
     listening, something that does not speak XML-RPC or never answers (rosgraph's own check then waits
     forever), or a node's API (it has no ``getSystemState``)."""
     try:
-        proxy = xmlrpc.client.ServerProxy(uri, transport=_BoundedTransport(timeout_s))
+        proxy = bounded_proxy(uri, timeout_s)
         code, _, _ = proxy.getSystemState('/master_check')
         pid_code, _, pid = proxy.getPid('/master_check')
     except Exception:   # refused, timed out, not XML-RPC, no such method, a malformed URI

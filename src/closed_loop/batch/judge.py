@@ -64,10 +64,11 @@ class StartSettings:
     (a C++ node loading, a launch file of several nodes) meets the same world as an in-process episode's."""
     unpause: str = param('', '', "the simulator's unpause service (scenario.launch: /sim/unpause_physics, with the "
                          "simulator started paused), called once a node publishes cmd_vel; empty: none")
-    ready_timeout: float = param(30.0, 's', 'wall time to wait for a node that publishes cmd_vel before starting '
-                                 'the simulation anyway (the verdict then says no command came)', minimum=0.0)
-    settle: float = param(0.2, 's', "wall time between the controller's cmd_vel appearing and the start, for "
-                          'its subscriptions to connect', minimum=0.0)
+    ready_timeout: float = param(30.0, 's', 'wall time to wait for a node that publishes cmd_vel, and for its '
+                                 'connections, before starting the simulation anyway (a warning says what was '
+                                 'missing)', minimum=0.0)
+    settle: float = param(0.2, 's', "wall time between the controller's connections being made (from what it "
+                          'subscribes to, to what reads its cmd_vel) and the start', minimum=0.0)
     wait_for: str = param('', '', 'more topics, separated by spaces, that must have a publisher before the start '
                           "(scenario.launch's bag: the scenario recorder's ~recording, once it is connected)")
 

@@ -14,6 +14,7 @@ from std_msgs.msg import Float32, String, UInt32
 
 from closed_loop.batch.judge import Judge, JudgeSettings, StartSettings
 from closed_loop.geometry import quaternion_yaw
+from closed_loop.nodes import graph_ready
 from closed_loop.nodes.common import Publisher, goal_param, init_node, load_settings, stamp_to_sec
 from closed_loop.sim.simulation import SimSettings
 
@@ -33,7 +34,8 @@ class ScenarioJudge:
     contacts, min_clearance_m, final_pose, goal_error_m, path_m, peak_decel_mps2, commands, why), once, when
     the scenario is over; the verdict's line is also logged.
     Parameters: :class:`closed_loop.batch.judge.JudgeSettings` and :class:`closed_loop.batch.judge.StartSettings`
-    (with ``~unpause``, it starts the paused simulator once a node publishes ``cmd_vel``); ``~goal_x``,
+    (with ``~unpause``, it starts the paused simulator once a node publishes ``cmd_vel`` and its connections
+    are made: ``closed_loop.nodes.graph_ready``); ``~goal_x``,
     ``~goal_y`` (m, in the world frame: both or neither); ``~verdict_file`` (a path: the verdict's JSON is
     also written there, whole or not at all); ``~keep_track`` (bool: the verdict file also holds the track, a
     row per judged instant, and the contacts, for a picture of the scenario: ``closed_loop.batch.pictures``).
@@ -63,8 +65,9 @@ class ScenarioJudge:
                       self.settings.time_limit)
 
     def _start_when_ready(self):
-        """Unpause the simulator once some node publishes cmd_vel and each of the ``wait_for`` topics has a
-        publisher (and their subscriptions have had ``settle`` to connect), or after ``ready_timeout`` anyway."""
+        """Unpause the simulator once some node publishes cmd_vel, each of the ``wait_for`` topics has a
+        publisher, and the controller's connections are made (then ``settle`` more), or after ``ready_timeout``
+        anyway."""
         topic, master = rospy.resolve_name('cmd_vel'), rosgraph.Master(rospy.get_name())
         deadline = time.monotonic() + self.start.ready_timeout
         publishers = self._wait_for_publisher(master, topic, deadline)
@@ -73,8 +76,15 @@ class ScenarioJudge:
                 rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', other,
                               self.start.ready_timeout)
         if publishers:
-            time.sleep(self.start.settle)
-            rospy.loginfo('the controller is up (%s publishes %s): starting the simulation', publishers[0], topic)
+            lacking = self._wait_for_connections(master, publishers, topic, deadline)
+            if lacking:
+                rospy.logwarn('%d connection%s of the controller not made after %g s (%s): starting the simulation '
+                              'anyway', len(lacking), '' if len(lacking) == 1 else 's', self.start.ready_timeout,
+                              ', '.join(lacking[:3]) + (', ...' if len(lacking) > 3 else ''))
+            else:
+                time.sleep(self.start.settle)
+                rospy.loginfo('the controller is up (%s publishes %s, connected): starting the simulation',
+                              publishers[0], topic)
         else:
             rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', topic,
                           self.start.ready_timeout)
@@ -96,6 +106,17 @@ class ScenarioJudge:
                 return publishers
             time.sleep(0.05)
         return []
+
+    @staticmethod
+    def _wait_for_connections(master, nodes, topic, deadline):
+        """Wait until each of ``nodes`` (the publishers of cmd_vel) has every connection it needs made: from
+        each publisher of what it subscribes to, and to each subscriber of ``topic``. The connections still
+        missing at ``deadline`` (wall clock), [] once all are made."""
+        while True:
+            lacking = [line for node in nodes for line in graph_ready.missing(master, node, rospy.get_name(), {topic})]
+            if not lacking or rospy.is_shutdown() or time.monotonic() >= deadline:
+                return lacking
+            time.sleep(0.05)
 
     def _on_contacts(self, msg):
         with self.lock:

@@ -1,0 +1,55 @@
+"""Whether a node's connections are made: what a scenario waits for before its clock starts.
+
+A node that has registered its publishers and subscribers with the master is not yet connected: each
+subscription still asks every publisher for a connection (the master tells it whom; the publisher's TCPROS
+server accepts), and until then what is published does not reach it. A controller that publishes zero
+commands while it waits for its first scan, started before its connections were made, stood still for the
+judge's ``rest_hold`` and was judged ``stopped`` at the start line on a loaded machine.
+
+A connection counts as made when its publisher lists it: a node's ``getBusInfo`` (the slave API, as
+``rosnode info`` reads it; rospy and roscpp alike) has a row ``(id, destination, 'o', transport, topic,
+...)`` for each subscriber it sends to, once that subscriber's header has been accepted.
+"""
+import rosgraph
+
+from closed_loop import netenv
+
+#: Wall time (s) a call to a node's API gets before it counts as not answering.
+CALL_TIMEOUT_S = 2.0
+
+
+def wanted(state, node, out_topics=None):
+    """The connections ``(publisher, topic, subscriber)`` that ``node`` needs, from the master's
+    ``getSystemState``: one from every publisher of each topic it subscribes to, and one to every subscriber
+    of each topic it publishes (of ``out_topics`` only, if given)."""
+    publishers, subscribers = dict(state[0]), dict(state[1])
+    inbound = {(p, topic, node) for topic, nodes in subscribers.items() if node in nodes
+               for p in publishers.get(topic, ()) if p != node}
+    outbound = {(node, topic, s) for topic, nodes in publishers.items() if node in nodes
+                and (out_topics is None or topic in out_topics) for s in subscribers.get(topic, ()) if s != node}
+    return sorted(inbound | outbound)
+
+
+def listed(bus_info, topic, subscriber):
+    """True if a publisher's ``getBusInfo`` rows hold an outbound connection on ``topic`` to ``subscriber``."""
+    return any(len(row) > 4 and row[2] == 'o' and row[4] == topic and row[1] == subscriber for row in bus_info)
+
+
+def bus_info(master, node, caller_id):
+    """``node``'s getBusInfo rows, or [] where it cannot be asked (gone, not answering, not a node)."""
+    try:
+        code, _, rows = netenv.bounded_proxy(master.lookupNode(node), CALL_TIMEOUT_S).getBusInfo(caller_id)
+    except Exception:    # unknown to the master, refused, timed out, a fault: not connected, as far as we know
+        return []
+    return rows if code == 1 and isinstance(rows, list) else []
+
+
+def missing(master, node, caller_id, out_topics=None):
+    """The connections of :func:`wanted` that their publishers do not list yet, as ``'P -> TOPIC -> S'``
+    lines; [] once all are made. ``master``: a ``rosgraph.Master``."""
+    try:
+        pairs = wanted(master.getSystemState(), node, out_topics)
+    except (rosgraph.MasterException, OSError) as error:
+        return ['the master: %s' % error]
+    rows = {p: bus_info(master, p, caller_id) for p in {pair[0] for pair in pairs}}
+    return ['%s -> %s -> %s' % pair for pair in pairs if not listed(rows[pair[0]], pair[1], pair[2])]
