@@ -41,6 +41,7 @@ def node_settings():
         'record_bag': (recording.RecordSettings,),
         'scenario_recorder': (recording.ScenarioRecordSettings,),
         'scenario_judge': (judge.JudgeSettings, judge.StartSettings),
+        'start_when_ready': (judge.StartSettings,),
     }
     for name, cls in controller_classes().items():
         nodes[name] = (cls.settings_class,) + tuple(cls.extra_settings_classes)

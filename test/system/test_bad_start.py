@@ -1,5 +1,6 @@
 """Starting a node with bad input ends it at once with one clear line: a file that is not a world, a world
-over the limits, a rate that would put the watchdogs to sleep, a log folder that cannot be written."""
+over the limits, a rate that would put the watchdogs to sleep, a log folder that cannot be written, a starter with no service to
+call."""
 import subprocess
 import time
 
@@ -82,3 +83,9 @@ def test_an_unwritable_log_folder_gives_one_line(roscore, tmp_path):
     lines = [line for line in out.splitlines() if line.strip()]
     assert len(lines) == 1 and 'obstacle_detector' in lines[0] and str(target) in lines[0] \
         and 'ROS_LOG_DIR' in lines[0], out
+
+
+def test_start_when_ready_without_a_service_to_call_says_so(roscore):
+    code, out, _ = run_node(roscore, 'start_when_ready')
+    assert code == 2, out
+    assert fatal_lines(out) == [line for line in out.splitlines() if '~unpause' in line] and len(fatal_lines(out)) == 1, out

@@ -63,7 +63,8 @@ class StartSettings:
     waits, paused at t = 0, until the controller is up, so that a controller that takes a while to start
     (a C++ node loading, a launch file of several nodes) meets the same world as an in-process episode's."""
     unpause: str = param('', '', "the simulator's unpause service (scenario.launch: /sim/unpause_physics, with the "
-                         "simulator started paused), called once a node publishes cmd_vel; empty: none")
+                         "simulator started paused), called once the controller is up; empty: none (the judge), "
+                         "required (start_when_ready)")
     ready_timeout: float = param(30.0, 's', 'wall time to wait for a node that publishes cmd_vel, and for its '
                                  'connections, before starting the simulation anyway (a warning says what was '
                                  'missing)', minimum=0.0)

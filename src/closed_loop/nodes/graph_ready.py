@@ -9,8 +9,16 @@ judge's ``rest_hold`` and was judged ``stopped`` at the start line on a loaded m
 A connection counts as made when its publisher lists it: a node's ``getBusInfo`` (the slave API, as
 ``rosnode info`` reads it; rospy and roscpp alike) has a row ``(id, destination, 'o', transport, topic,
 ...)`` for each subscriber it sends to, once that subscriber's header has been accepted.
+
+:func:`start_when_ready` starts a simulator that waits paused at t = 0 once the controller is up so: the
+scenario judge runs it (``scenario.launch``), and the ``start_when_ready`` node does for any other launch
+(``demo.launch paused:=true``), whose world's moving obstacles then meet the robot when the docs say.
 """
+import time
+
 import rosgraph
+import rospy
+from std_srvs.srv import Empty
 
 from closed_loop import netenv
 
@@ -53,3 +61,59 @@ def missing(master, node, caller_id, out_topics=None):
         return ['the master: %s' % error]
     rows = {p: bus_info(master, p, caller_id) for p in {pair[0] for pair in pairs}}
     return ['%s -> %s -> %s' % pair for pair in pairs if not listed(rows[pair[0]], pair[1], pair[2])]
+
+
+def start_when_ready(start):
+    """Call ``start.unpause`` (a std_srvs/Empty service: the simulator's) once some node publishes cmd_vel, each
+    of the ``start.wait_for`` topics has a publisher, and the cmd_vel publishers' connections are made (then
+    ``start.settle`` more), or after ``start.ready_timeout`` anyway, with a warning that says what was missing.
+    ``start``: a :class:`closed_loop.batch.judge.StartSettings`."""
+    topic, master = rospy.resolve_name('cmd_vel'), rosgraph.Master(rospy.get_name())
+    deadline = time.monotonic() + start.ready_timeout
+    publishers = _wait_for_publisher(master, topic, deadline)
+    for other in start.wait_for.split():
+        if publishers and not _wait_for_publisher(master, rospy.resolve_name(other), deadline):
+            rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', other, start.ready_timeout)
+    if not publishers:
+        rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', topic, start.ready_timeout)
+    else:
+        lacking = _wait_for_connections(master, publishers, topic, deadline)
+        if lacking:
+            rospy.logwarn('%d connection%s of the controller not made after %g s (%s): starting the simulation '
+                          'anyway', len(lacking), '' if len(lacking) == 1 else 's', start.ready_timeout,
+                          ', '.join(lacking[:3]) + (', ...' if len(lacking) > 3 else ''))
+        else:
+            time.sleep(start.settle)
+            rospy.loginfo('the controller is up (%s publishes %s, connected): starting the simulation',
+                          publishers[0], topic)
+    try:
+        rospy.wait_for_service(start.unpause, timeout=start.ready_timeout + 1.0)
+        rospy.ServiceProxy(start.unpause, Empty)()
+    except (rospy.ROSException, rospy.ServiceException) as error:
+        rospy.logerr('cannot start the simulation (%s): %s', start.unpause, error)
+        return False
+    return True
+
+
+def _wait_for_publisher(master, topic, deadline):
+    """The nodes that publish ``topic``, once there is one, or [] at ``deadline`` (wall clock)."""
+    while not rospy.is_shutdown() and time.monotonic() < deadline:
+        try:
+            publishers = dict(master.getSystemState()[0]).get(topic, [])
+        except (rosgraph.MasterException, OSError):
+            publishers = []
+        if publishers:
+            return publishers
+        time.sleep(0.05)
+    return []
+
+
+def _wait_for_connections(master, nodes, topic, deadline):
+    """Wait until each of ``nodes`` (the publishers of cmd_vel) has every connection it needs made: from each
+    publisher of what it subscribes to, and to each subscriber of ``topic``. The connections still missing at
+    ``deadline`` (wall clock), [] once all are made."""
+    while True:
+        lacking = [line for node in nodes for line in missing(master, node, rospy.get_name(), {topic})]
+        if not lacking or rospy.is_shutdown() or time.monotonic() >= deadline:
+            return lacking
+        time.sleep(0.05)

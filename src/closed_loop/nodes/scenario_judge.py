@@ -3,12 +3,9 @@ import json
 import os
 import tempfile
 import threading
-import time
 
-import rosgraph
 import rospy
 from geometry_msgs.msg import Twist
-from std_srvs.srv import Empty
 from nav_msgs.msg import Odometry
 from std_msgs.msg import Float32, String, UInt32
 
@@ -59,64 +56,10 @@ class ScenarioJudge:
         rospy.Subscriber('base_pose_ground_truth', Odometry, self._on_truth, queue_size=50)
         self.start = load_settings(StartSettings)
         if self.start.unpause:
-            threading.Thread(target=self._start_when_ready, daemon=True).start()
+            threading.Thread(target=graph_ready.start_when_ready, args=(self.start,), daemon=True).start()
         rospy.loginfo('judging: %s; time limit %.1f s', 'goal (%.2f, %.2f), success within %.2f m'
                       % (self.goal + (self.settings.success_radius,)) if self.goal else 'no goal',
                       self.settings.time_limit)
-
-    def _start_when_ready(self):
-        """Unpause the simulator once some node publishes cmd_vel, each of the ``wait_for`` topics has a
-        publisher, and the controller's connections are made (then ``settle`` more), or after ``ready_timeout``
-        anyway."""
-        topic, master = rospy.resolve_name('cmd_vel'), rosgraph.Master(rospy.get_name())
-        deadline = time.monotonic() + self.start.ready_timeout
-        publishers = self._wait_for_publisher(master, topic, deadline)
-        for other in self.start.wait_for.split():
-            if publishers and not self._wait_for_publisher(master, rospy.resolve_name(other), deadline):
-                rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', other,
-                              self.start.ready_timeout)
-        if publishers:
-            lacking = self._wait_for_connections(master, publishers, topic, deadline)
-            if lacking:
-                rospy.logwarn('%d connection%s of the controller not made after %g s (%s): starting the simulation '
-                              'anyway', len(lacking), '' if len(lacking) == 1 else 's', self.start.ready_timeout,
-                              ', '.join(lacking[:3]) + (', ...' if len(lacking) > 3 else ''))
-            else:
-                time.sleep(self.start.settle)
-                rospy.loginfo('the controller is up (%s publishes %s, connected): starting the simulation',
-                              publishers[0], topic)
-        else:
-            rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', topic,
-                          self.start.ready_timeout)
-        try:
-            rospy.wait_for_service(self.start.unpause, timeout=self.start.ready_timeout + 1.0)
-            rospy.ServiceProxy(self.start.unpause, Empty)()
-        except (rospy.ROSException, rospy.ServiceException) as error:
-            rospy.logerr('cannot start the simulation (%s): %s', self.start.unpause, error)
-
-    @staticmethod
-    def _wait_for_publisher(master, topic, deadline):
-        """The nodes that publish ``topic``, once there is one, or [] at ``deadline`` (wall clock)."""
-        while not rospy.is_shutdown() and time.monotonic() < deadline:
-            try:
-                publishers = dict(master.getSystemState()[0]).get(topic, [])
-            except (rosgraph.MasterException, OSError):
-                publishers = []
-            if publishers:
-                return publishers
-            time.sleep(0.05)
-        return []
-
-    @staticmethod
-    def _wait_for_connections(master, nodes, topic, deadline):
-        """Wait until each of ``nodes`` (the publishers of cmd_vel) has every connection it needs made: from
-        each publisher of what it subscribes to, and to each subscriber of ``topic``. The connections still
-        missing at ``deadline`` (wall clock), [] once all are made."""
-        while True:
-            lacking = [line for node in nodes for line in graph_ready.missing(master, node, rospy.get_name(), {topic})]
-            if not lacking or rospy.is_shutdown() or time.monotonic() >= deadline:
-                return lacking
-            time.sleep(0.05)
 
     def _on_contacts(self, msg):
         with self.lock:
