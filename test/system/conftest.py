@@ -99,6 +99,18 @@ def kill_group(process):
         process.wait(5)
 
 
+def wait_for(predicate, timeout_s, what, poll_s=0.1):
+    """``predicate()``'s value once it is true, polled every ``poll_s``; AssertionError naming ``what`` after
+    ``timeout_s`` (a bound that only catches hangs)."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        found = predicate()
+        if found:
+            return found
+        time.sleep(poll_s)
+    raise AssertionError('%s: not within %g s' % (what, timeout_s))
+
+
 @pytest.fixture
 def roscore(tmp_path):
     """A master (roscore) on a free loopback port; yields its environment."""

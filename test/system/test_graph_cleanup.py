@@ -6,9 +6,8 @@ import os
 import signal
 import subprocess
 import sys
-import time
 
-from conftest import graph_leftovers, run_sweep, stop
+from conftest import graph_leftovers, run_sweep, stop, wait_for
 
 SWEEP_TIMEOUT_S = 300
 
@@ -18,16 +17,6 @@ def write_sweep(tmp_path, name, time_limits, seeds, rtf):
     path.write_text('name: %s\nbase:\n  world: wall\n  controller: {node: stop_on_obstacle}\n'
                     '  real_time_factor: %g\ngrid:\n  time_limit_s: %s\n  seed: %s\n' % (name, rtf, time_limits, seeds))
     return path
-
-
-def wait_for(predicate, timeout_s, what):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        found = predicate()
-        if found:
-            return found
-        time.sleep(0.2)
-    raise AssertionError('%s: not within %g s' % (what, timeout_s))
 
 
 def start_sweep(sweep, out):
@@ -70,7 +59,7 @@ def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
     out = tmp_path / 'out'
     process = start_sweep(sweep, out)
     try:
-        keeper, worker = wait_for(lambda: running_keepers(out), 120, 'a graph episode up')[0]
+        keeper, worker = wait_for(lambda: running_keepers(out), 120, 'a graph episode up', poll_s=0.2)[0]
         os.kill(worker, signal.SIGKILL)
         text, _ = process.communicate(timeout=SWEEP_TIMEOUT_S)
     finally:
@@ -90,7 +79,7 @@ def test_ctrl_c_stops_the_sweep_and_its_graphs(tmp_path):
     out = tmp_path / 'out'
     process = start_sweep(sweep, out)
     try:
-        wait_for(lambda: len(running_keepers(out)) == 2, 120, 'two graph episodes up')
+        wait_for(lambda: len(running_keepers(out)) == 2, 120, 'two graph episodes up', poll_s=0.2)
         os.killpg(process.pid, signal.SIGINT)          # what Ctrl-C in its terminal does
         text, _ = process.communicate(timeout=120)
     finally:

@@ -9,7 +9,7 @@ import xmlrpc.client
 
 import rosgraph
 
-from conftest import stop
+from conftest import stop, wait_for
 from closed_loop.nodes import graph_ready
 
 WAIT_S = 60.0     # bounds that only catch hangs
@@ -33,16 +33,6 @@ def register_ghost(env, kind, topic, msg_type, name='/ghost'):
     assert code == 1, status
 
 
-def until(predicate, what, timeout_s=WAIT_S):
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        value = predicate()
-        if value:
-            return value
-        time.sleep(0.1)
-    raise AssertionError('%s: not within %g s' % (what, timeout_s))
-
-
 def test_a_connection_counts_as_made_once_its_publisher_lists_it(roscore, tmp_path):
     master = rosgraph.Master(CALLER, master_uri=roscore['ROS_MASTER_URI'])
     log = open(str(tmp_path / 'nodes.log'), 'w')
@@ -50,7 +40,7 @@ def test_a_connection_counts_as_made_once_its_publisher_lists_it(roscore, tmp_pa
                               env=roscore, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
     listener = None
     try:
-        until(lambda: '/talker' in dict(master.getSystemState()[0]).get('/probe', []), 'talker up')
+        wait_for(lambda: '/talker' in dict(master.getSystemState()[0]).get('/probe', []), WAIT_S, 'talker up')
         assert graph_ready.missing(master, '/talker', CALLER) == []          # nobody reads /probe yet
         register_ghost(roscore, 'subscriber', '/probe', 'std_msgs/Empty')
         # Registered, and never connected: missing for as long as it lasts.
@@ -58,15 +48,16 @@ def test_a_connection_counts_as_made_once_its_publisher_lists_it(roscore, tmp_pa
         assert graph_ready.missing(master, '/talker', CALLER, {'/other'}) == []   # only the topics asked about
         listener = subprocess.Popen(['rostopic', 'echo', '/probe', '__name:=listener'], env=roscore, stdout=log,
                                     stderr=subprocess.STDOUT, start_new_session=True)
-        until(lambda: '/listener' in dict(master.getSystemState()[1]).get('/probe', []), 'listener registered')
-        until(lambda: graph_ready.missing(master, '/listener', CALLER) == [], 'the listener connected')
+        wait_for(lambda: '/listener' in dict(master.getSystemState()[1]).get('/probe', []), WAIT_S,
+                 'listener registered')
+        wait_for(lambda: graph_ready.missing(master, '/listener', CALLER) == [], WAIT_S, 'the listener connected')
         assert graph_ready.missing(master, '/talker', CALLER) == ['/talker -> /probe -> /ghost']
         # The ghost's own inbound connection is as missing, seen from its side.
         assert graph_ready.missing(master, '/ghost', CALLER) == ['/talker -> /probe -> /ghost']
         # A publisher that cannot be asked (gone, or never was) lists nothing: its connections are missing.
         register_ghost(roscore, 'publisher', '/probe', 'std_msgs/Empty', name='/ghost_talker')
-        until(lambda: graph_ready.missing(master, '/listener', CALLER) == ['/ghost_talker -> /probe -> /listener'],
-              'the ghost publisher missing')
+        wait_for(lambda: graph_ready.missing(master, '/listener', CALLER) == ['/ghost_talker -> /probe -> /listener'],
+                 WAIT_S, 'the ghost publisher missing')
     finally:
         for process in (listener, talker):
             if process is not None:
@@ -87,7 +78,7 @@ def test_the_judge_holds_the_clock_until_the_controllers_connections_are_made(ro
                                'real_time_factor:=4', 'verdict_file:=%s' % verdict_file],
                               env=roscore, stdout=open(str(out), 'w'), stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        until(lambda: verdict_file.exists() or launch.poll() is not None, 'a verdict', timeout_s=120)
+        wait_for(lambda: verdict_file.exists() or launch.poll() is not None, 120, 'a verdict')
     finally:
         stop(launch)
     took_s = time.monotonic() - began
