@@ -9,7 +9,7 @@ from closed_loop.batch import graph_episode
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare
 from closed_loop.batch.judge import Judge, JudgeSettings, Verdict
 from closed_loop.controllers import controller_classes
-from closed_loop.nodes.scenario_test import problems
+from closed_loop.batch.judge import problems
 
 
 def drive(judge, track, dt=0.1):

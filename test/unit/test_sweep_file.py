@@ -1,6 +1,7 @@
 """Sweep files fail fast: a grid is made lazily (a million combinations start in seconds and little memory),
 each key's values are checked once, and an error about a file that is not a sweep never shows its content."""
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -10,6 +11,8 @@ import pytest
 from closed_loop.batch import sweep_file
 from closed_loop.batch.episode import EpisodeError, prepare
 from closed_loop.batch.sweep_file import SweepError
+
+SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'src'))
 
 MILLION = textwrap.dedent("""\
     import json, sys, time
@@ -41,8 +44,11 @@ def test_a_million_combinations_are_made_lazily_and_checked_once_per_key_value(t
                  '  settings.stop_distance: [0.3]\n')
     script = tmp_path / 'million.py'
     script.write_text(MILLION)
+    # The package from this source tree, as conftest.py gives it to the tests (not only where a workspace's
+    # setup puts it on PYTHONPATH).
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get('PYTHONPATH')) if p))
     done = subprocess.run([sys.executable, str(script), path], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                          universal_newlines=True, timeout=120)
+                          universal_newlines=True, timeout=120, env=env)
     assert done.returncode == 0, done.stdout[-2000:]
     figures = json.loads(done.stdout.strip().splitlines()[-1])
     assert figures['episodes'] == 1000000 and figures['last_seed'] == 999999 and figures['made'] == 999

@@ -18,7 +18,8 @@ goal; when it has been at rest for ``rest_hold`` anywhere, with ``end_at_rest`` 
 for good; a navigator that waits sets it false); at ``time_limit``. The outcome: ``collided`` with any
 contact, whatever else; ``reached`` when the controller said REACHED within ``success_radius`` of the goal,
 or the robot came to rest there; ``failed`` when the controller said FAILED, or REACHED elsewhere;
-``stopped`` when it came to rest elsewhere; ``timed_out`` otherwise.
+``stopped`` when it came to rest elsewhere; ``timed_out`` otherwise. What of a scenario test's expectations a
+verdict breaks: :func:`problems` (the ``scenario_test`` node's check).
 """
 import dataclasses
 import math
@@ -268,3 +269,19 @@ class Judge:
         if not self.commands:
             line += '; no command ever reached the base'
         return line
+
+
+def problems(verdict, expect):
+    """What of ``expect`` (outcomes, max_contacts, min_clearance, within: what a scenario test asks) the verdict (a
+    dict) breaks, as phrases; [] when all holds."""
+    found = []
+    if verdict['outcome'] not in expect['outcomes']:
+        found.append('outcome %s, expected %s' % (verdict['outcome'], ' or '.join(expect['outcomes'])))
+    if verdict['contacts'] > expect['max_contacts']:
+        found.append('%d contacts, at most %d allowed' % (verdict['contacts'], expect['max_contacts']))
+    clearance = verdict['min_clearance_m'] if verdict['min_clearance_m'] is not None else math.inf
+    if expect['min_clearance'] is not None and clearance < expect['min_clearance']:
+        found.append('least clearance %.3f m, at least %.3f m required' % (clearance, expect['min_clearance']))
+    if expect['within'] is not None and verdict['time_s'] > expect['within']:
+        found.append('after %.1f s, within %.1f s required' % (verdict['time_s'], expect['within']))
+    return found

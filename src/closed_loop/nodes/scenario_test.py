@@ -1,13 +1,14 @@
 """scenario_test: a rostest test node that waits for the scenario judge's verdict and checks it against what
 the test file says must hold. The judging is scenario_judge's; this only compares."""
 import json
-import math
 import threading
 import unittest
 
 import rospy
 import rostest
 from std_msgs.msg import String
+
+from closed_loop.batch.judge import problems
 
 #: How long to wait for the verdict (s of wall time) unless ~wait says; rostest's time-limit also applies.
 DEFAULT_WAIT_S = 600.0
@@ -20,21 +21,6 @@ def expectations():
     outcomes = [o.strip() for o in str(rospy.get_param('~expect', 'reached')).split(',') if o.strip()]
     return {'outcomes': outcomes, 'max_contacts': int(rospy.get_param('~max_contacts', 0)),
             'min_clearance': rospy.get_param('~min_clearance', None), 'within': rospy.get_param('~within', None)}
-
-
-def problems(verdict, expect):
-    """What of ``expect`` the verdict (a dict) breaks, as phrases; [] when all holds."""
-    found = []
-    if verdict['outcome'] not in expect['outcomes']:
-        found.append('outcome %s, expected %s' % (verdict['outcome'], ' or '.join(expect['outcomes'])))
-    if verdict['contacts'] > expect['max_contacts']:
-        found.append('%d contacts, at most %d allowed' % (verdict['contacts'], expect['max_contacts']))
-    clearance = verdict['min_clearance_m'] if verdict['min_clearance_m'] is not None else math.inf
-    if expect['min_clearance'] is not None and clearance < expect['min_clearance']:
-        found.append('least clearance %.3f m, at least %.3f m required' % (clearance, expect['min_clearance']))
-    if expect['within'] is not None and verdict['time_s'] > expect['within']:
-        found.append('after %.1f s, within %.1f s required' % (verdict['time_s'], expect['within']))
-    return found
 
 
 class Scenario(unittest.TestCase):

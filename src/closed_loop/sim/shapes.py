@@ -4,9 +4,8 @@ An obstacle is a vertical prism: a box (walls are boxes) or a cylinder. :data:`S
 obstacle's ``shape`` to a class that gives, for one obstacle at its time-0 position, the signed distance
 from a point to its footprint, its outline (for pictures), whether a robot's rectangle overlaps it, and its
 pybullet collision and visual shapes (alone, or as one of a compound's). World checks, the demo's clearance report and the simulator all go through this table, so
-a new shape is one class here. Each also casts planar rays at its obstacles (``ray_prepare`` once per
-scan, then ``ray_pairs`` for ray-obstacle pairs), for the LIDAR's planar ray caster
-(``closed_loop.sim.planar_rays``).
+a new shape is one class here, and for the LIDAR's planar ray caster (``closed_loop.sim.planar_rays``) its
+ray test there, by its ``RAY_KIND``, with the numbers ``ray_params`` gives of each obstacle.
 """
 import math
 
@@ -60,35 +59,14 @@ class Box:
         box = _corners(obstacle.position[0], obstacle.position[1], obstacle.yaw, -hx, hx, -hy, hy)
         return not separated(robot_corners(pose, rect), box)
 
+    #: The planar caster's code for a box (``closed_loop.sim.planar_rays._hit``).
+    RAY_KIND = 0
+
     @staticmethod
     def ray_params(obstacles):
-        """What the planar caster needs of each box, (M, 5): cos and sin of its yaw, its half-sizes, and the
-        radius of the circle round its footprint."""
-        return numpy.array([(math.cos(o.yaw), math.sin(o.yaw), 0.5 * o.size[0], 0.5 * o.size[1],
-                             0.5 * math.hypot(o.size[0], o.size[1])) for o in obstacles]).reshape(-1, 5)
-
-    @staticmethod
-    def ray_prepare(params, rel_x, rel_y):
-        """What :meth:`ray_pairs` needs of each box (``params`` rows of :meth:`ray_params`; ``rel_x``, ``rel_y``
-        (M,): its centre seen from the rays' origin): its yaw's cosine and sine, its half sizes, and the
-        origin in its frame."""
-        c, s, hx, hy = params[:, 0], params[:, 1], params[:, 2], params[:, 3]
-        rx, ry = -rel_x, -rel_y
-        return c, s, hx, hy, c * rx + s * ry, -s * rx + c * ry
-
-    @staticmethod
-    def ray_pairs(prepared, obstacle, fx, fy):
-        """Distance along each ray (directions ``fx``, ``fy``, unit) to box ``obstacle`` (indices into
-        :meth:`ray_prepare`'s arrays, shaped as the rays), inf where the ray misses it (or starts inside)."""
-        c, s, hx, hy, ox, oy = (a[obstacle] for a in prepared)
-        dx, dy = fx * c + fy * s, -fx * s + fy * c
-        with numpy.errstate(divide='ignore', invalid='ignore'):
-            inv_x, inv_y = 1.0 / dx, 1.0 / dy
-            ax, bx = (-hx - ox) * inv_x, (hx - ox) * inv_x
-            ay, by = (-hy - oy) * inv_y, (hy - oy) * inv_y
-            near = numpy.maximum(numpy.fmin(ax, bx), numpy.fmin(ay, by))
-            far = numpy.minimum(numpy.fmax(ax, bx), numpy.fmax(ay, by))
-        return numpy.where((near <= far) & (near >= 0.0), near, numpy.inf)
+        """What the planar caster needs of each box, (M, 4): cos and sin of its yaw, and its half-sizes."""
+        return numpy.array([(math.cos(o.yaw), math.sin(o.yaw), 0.5 * o.size[0], 0.5 * o.size[1])
+                            for o in obstacles]).reshape(-1, 4)
 
     @staticmethod
     def pybullet_kind(obstacle, pybullet):
@@ -126,25 +104,13 @@ class Cylinder:
         gap = math.hypot(max(x_min - lx, 0.0, lx - x_max), max(y_min - ly, 0.0, ly - y_max))
         return gap < obstacle.radius
 
+    #: The planar caster's code for a cylinder.
+    RAY_KIND = 1
+
     @staticmethod
     def ray_params(obstacles):
-        """(M, 1): each cylinder's radius (also that of the circle round its footprint, the last column)."""
+        """(M, 1): each cylinder's radius."""
         return numpy.array([(o.radius,) for o in obstacles]).reshape(-1, 1)
-
-    @staticmethod
-    def ray_prepare(params, rel_x, rel_y):
-        """As :meth:`Box.ray_prepare`, for cylinders: the centre from the origin, and its squared distance less
-        the squared radius."""
-        return rel_x, rel_y, rel_x * rel_x + rel_y * rel_y - params[:, 0] * params[:, 0]
-
-    @staticmethod
-    def ray_pairs(prepared, obstacle, fx, fy):
-        """As :meth:`Box.ray_pairs`, for cylinders."""
-        rx, ry, c = prepared
-        b = fx * rx[obstacle] + fy * ry[obstacle]          # along each ray to the closest point
-        disc = b * b - c[obstacle]
-        t = b - numpy.sqrt(numpy.maximum(disc, 0.0))
-        return numpy.where((disc >= 0.0) & (t >= 0.0), t, numpy.inf)
 
     @staticmethod
     def pybullet_kind(obstacle, pybullet):
