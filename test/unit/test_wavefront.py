@@ -1,39 +1,55 @@
-"""The way through the scan's points: where no chain of passable cells joins the goal to the robot, the
-answer (no way) comes without the wave, and is the wave's own answer."""
+"""The way through the scan's points: the compiled wave, gaps, the way kept, corridors."""
+import math
+
+import cv2
 import numpy
 import pytest
 
-from closed_loop.control import wavefront
+from closed_loop.control import wave_kernel, wavefront
 
 
-def clutter(rng, posts):
-    """Posts as rings of points round random centres, some of them on a wall across the way."""
-    centres = rng.uniform((-1.0, -4.0), (7.0, 4.0), (posts, 2))
-    around = numpy.linspace(0.0, 2 * numpy.pi, 12, endpoint=False)
-    ring = 0.1 * numpy.column_stack((numpy.cos(around), numpy.sin(around)))
-    wall_y = rng.uniform(-4.0, 4.0, int(rng.integers(0, 40)))
-    wall = numpy.column_stack((numpy.full(len(wall_y), 3.0), wall_y))
-    return numpy.concatenate([(centres[:, None, :] + ring[None]).reshape(-1, 2), wall])
+def image_wave(passable, start, goal):
+    """The wave as images (OpenCV's dilation by a 3x3 square in odd rounds, a cross in even ones, within the
+    passable cells not yet reached): what the compiled wave must give, cell for cell."""
+    steps = numpy.full(passable.shape, wave_kernel.UNREACHED, numpy.int32)
+    steps[goal] = 0
+    front = numpy.zeros(passable.shape, numpy.uint8)
+    front[goal] = 1
+    cross = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
+    k = 0
+    while steps[start] == wave_kernel.UNREACHED:
+        k += 1
+        front = cv2.dilate(front, numpy.ones((3, 3), numpy.uint8) if k % 2 else cross)
+        front &= (passable & (steps == wave_kernel.UNREACHED)).astype(numpy.uint8)
+        if not front.any():
+            return -1, steps
+        steps[front > 0] = k
+    return k, steps
 
 
-def test_no_chain_of_passable_cells_gives_no_way_as_the_wave_does(monkeypatch):
+def test_the_compiled_wave_reaches_each_cell_in_the_round_the_images_do():
     rng = numpy.random.default_rng(11)
-    cases = [(clutter(rng, int(rng.integers(5, 60))), (float(rng.uniform(4.0, 8.0)), float(rng.uniform(-2.0, 2.0))))
-             for _ in range(300)]
-    shortcut = [wavefront.way(points, goal, 0.35, 1.0) for points, goal in cases]
-    # The same cases with every cell in one component: the wave alone decides.
-    connected = wavefront.cv2.connectedComponents
-    monkeypatch.setattr(wavefront.cv2, 'connectedComponents',
-                        lambda image, **kw: (2, numpy.ones(image.shape, numpy.uint16)))
-    waved = [wavefront.way(points, goal, 0.35, 1.0) for points, goal in cases]
-    monkeypatch.setattr(wavefront.cv2, 'connectedComponents', connected)
-    none = sum(w is None for w in waved)
-    assert 30 <= none <= 270, 'the cases should mix ways and none: %d of 300 have none' % none
-    for a, b in zip(shortcut, waved):
-        assert (a is None) == (b is None)
-        if a is not None:
-            assert a.aim == b.aim and a.goal == b.goal
-            assert numpy.array_equal(a.route(), b.route())
+    reached = unreached = 0
+    for _ in range(300):
+        passable = rng.random((int(rng.integers(5, 60)), int(rng.integers(5, 60)))) < rng.uniform(0.45, 0.9)
+        start = tuple(int(rng.integers(0, n)) for n in passable.shape)
+        goal = tuple(int(rng.integers(0, n)) for n in passable.shape)
+        passable[start] = passable[goal] = True
+        k, steps = wave_kernel.wave(passable, start, goal, 254)
+        want_k, want = image_wave(passable, start, goal)
+        assert k == want_k
+        if k >= 0:
+            assert numpy.array_equal(steps, want)
+            reached += 1
+        else:
+            unreached += 1
+    assert reached >= 30 and unreached >= 30, (reached, unreached)
+
+
+def test_a_wave_longer_than_its_rounds_finds_no_way():
+    passable = numpy.ones((3, 40), bool)
+    assert wave_kernel.wave(passable, (1, 0), (1, 39), 40)[0] == 39
+    assert wave_kernel.wave(passable, (1, 0), (1, 39), 39)[0] == -1
 
 
 @pytest.mark.parametrize('gap', [0.5, 1.2])
@@ -70,3 +86,26 @@ def test_the_way_followed_is_kept_while_it_is_open_and_not_much_longer():
     # A way followed far longer than the new shortest is dropped.
     detour = wavefront.way(wall_with_gaps(-2.8), goal, 0.35, 1.0).route()
     assert wavefront.way(wall_with_gaps(1.0, -2.8), goal, 0.35, 1.0, kept=detour).aim[1] > 0.3
+
+
+def test_a_cell_is_in_sight_only_where_every_cell_on_the_line_to_it_is_passable():
+    passable = numpy.ones((7, 7), bool)
+    passable[3, 3] = False
+    assert not wave_kernel.in_sight(passable, (0, 0), (6, 6))          # the diagonal crosses (3, 3)
+    assert not wave_kernel.in_sight(passable, (3, 0), (3, 6))
+    assert wave_kernel.in_sight(passable, (2, 0), (2, 6)) and wave_kernel.in_sight(passable, (0, 6), (6, 6))
+    assert wave_kernel.in_sight(passable, (1, 1), (1, 1))
+    # A shallow line: sampled at twice the cells it crosses, each sample rounded to its cell.
+    passable[:] = True
+    passable[1, 4] = False
+    assert not wave_kernel.in_sight(passable, (0, 0), (2, 6)) and wave_kernel.in_sight(passable, (0, 0), (0, 6))
+
+
+def test_the_way_down_the_wave_stops_at_the_limit_and_where_sight_ends():
+    passable = numpy.ones((5, 12), bool)
+    k, steps = wave_kernel.wave(passable, (2, 0), (2, 11), 254)
+    whole = wave_kernel.descend(steps, (2, 0), (2, 11), 0.2, math.inf, numpy.zeros((0, 0), bool))
+    assert [tuple(c) for c in whole] == [(2, j) for j in range(12)]      # on the goal's line, to the goal
+    assert len(wave_kernel.descend(steps, (2, 0), (2, 11), 0.2, 0.5, passable)) == 4   # 0.6 m >= 0.5 m
+    passable[2, 5] = False                                                # out of sight beyond column 4
+    assert [tuple(c) for c in wave_kernel.descend(steps, (2, 0), (2, 11), 0.2, math.inf, passable)][-1] == (2, 4)

@@ -29,6 +29,7 @@ No way through (the scan shows the goal closed off) leaves the goal as the aim; 
 handles a robot that gets nowhere. Free of ROS.
 """
 import collections
+import importlib
 import math
 
 import cv2
@@ -39,16 +40,16 @@ FINE = 2
 BOX_MARGIN_M = 3.0
 MAX_BOX_M = 20.0
 START_SEARCH_M = 0.8
-GROWTH_CHECK = 4
-_CROSS = cv2.getStructuringElement(cv2.MORPH_CROSS, (3, 3))
-_SQUARE = numpy.ones((3, 3), numpy.uint8)
+#: A wave that has not reached the robot in this many rounds finds no way.
+WAVE_ROUNDS = 254
 #: A way kept from the last decision stays the way while it is at most KEEP_LONGER x the shortest + KEEP_EXTRA_M.
 KEEP_LONGER = 1.1
 KEEP_EXTRA_M = 0.5
 #: The wave's rounds to the start, times CELL_M and this, is at least the shortest way's length (alternating
 #: 4- and 8-neighbour steps make the octagonal distance, at most 8% short of the Euclidean).
 OCTAGONAL_M = 1.08
-_NEIGHBOURS = [(di, dj) for di in (-1, 0, 1) for dj in (-1, 0, 1) if di or dj]
+#: No sight asked of the way down the wave (``wave_kernel.descend``).
+_ANY = numpy.zeros((0, 0), bool)
 
 #: What :func:`way` found: the point to steer for, and the goal the way leads to (the goal given, or the
 #: point a corridor's line is closed off at), both (x, y) in the robot's frame; ``route()``: the whole way
@@ -132,49 +133,26 @@ def way(points, goal_xy, half_width_m, aim_m, sight_m=None, corridor=None, kept=
         # The straight line is the way: the aim is on it, exactly (not at a cell's centre).
         scale = min(1.0, aim_m / max(math.hypot(*goal), 1e-9))
         return Way((goal[0] * scale, goal[1] * scale), tuple(goal), lambda: numpy.array([(0.0, 0.0), tuple(goal)]))
-    # The wave, in OpenCV calls on uint8 images: ``left`` is what it may still enter, and ``count`` adds
-    # ``left`` once a round before the round's cells leave it, so a cell reached in round m (the goal in round
-    # 0) ends with m. Whether it still grows is asked every GROWTH_CHECK rounds only (a wave that stopped
-    # spends at most that many empty rounds).
-    left = passable.astype(numpy.uint8)
-    # The wave steps to 4- or 8-neighbours only: where no 8-connected chain of passable cells joins the goal to
-    # the start, it cannot reach the start, which one call finds out (in clutter, where no way is seen, this
-    # saves the whole wave; the answer, no way, is the same).
-    labels = cv2.connectedComponents(left, connectivity=8, ltype=cv2.CV_16U)[1]
-    if labels[start] != labels[goal_cell]:
+    # The wave (compiled: ``wave_kernel``), from the goal's cell until it reaches the start's.
+    kernel = _kernel()
+    k, steps = kernel.wave(passable, start, goal_cell, WAVE_ROUNDS)
+    if k < 0:
         return None
-    left[goal_cell] = 0
-    front = numpy.zeros((rows, cols), numpy.uint8)
-    front[goal_cell] = 1
-    count = numpy.zeros((rows, cols), numpy.uint8)
-    k = 0
-    while left[start]:
-        k += 1
-        if k >= 254:
-            return None
-        grown = cv2.dilate(front, _SQUARE if k % 2 else _CROSS)
-        cv2.bitwise_and(grown, left, dst=grown)
-        if k % GROWTH_CHECK == 0 and not cv2.countNonZero(grown):
-            return None
-        cv2.add(count, left, dst=count)
-        cv2.subtract(left, grown, dst=left)
-        front = grown
     if kept is not None and corridor is None:
         followed = _follow(kept, goal, passable, in_sight, start, (x0, y0), aim_m,
                            KEEP_LONGER * OCTAGONAL_M * CELL_M * k + KEEP_EXTRA_M)
         if followed is not None:
             return followed
-    steps = numpy.where(passable & (left == 0), count.astype(numpy.int32), numpy.iinfo(numpy.int32).max)
     # Down the wave from the start, aim_m of path. The aim is the farthest point of the way in sight of the
     # start through passable cells: steering for a point beyond a bend would cut the corner into what the
     # way goes round.
-    steps = steps.tolist()          # plain ints, read once: a walk of a few dozen cells reads them faster than numpy
-    cells = _descend(steps, start, goal_cell, aim_m, lambda cell: _in_sight(in_sight, start, cell))
-    centre = (lambda cell: (x0 + (cell[1] + 0.5) * CELL_M, y0 + (cell[0] + 0.5) * CELL_M))
-    route = (lambda: _route([centre(cell) for cell in _descend(steps, start, goal_cell)], goal))
-    if steps[cells[-1][0]][cells[-1][1]] == 0:
+    last = kernel.descend(steps, start, goal_cell, CELL_M, aim_m, in_sight)[-1]
+    centre = (lambda cell: (x0 + (int(cell[1]) + 0.5) * CELL_M, y0 + (int(cell[0]) + 0.5) * CELL_M))
+    route = (lambda: _route([centre(cell) for cell in kernel.descend(steps, start, goal_cell, CELL_M, math.inf,
+                                                                      _ANY)], goal))
+    if steps[last[0], last[1]] == 0:
         return Way(tuple(goal), tuple(goal), route)
-    return Way(centre(cells[-1]), tuple(goal), route)
+    return Way(centre(last), tuple(goal), route)
 
 
 def _follow(kept, goal, passable, in_sight, start, origin, aim_m, longest_m):
@@ -217,38 +195,6 @@ def _route(points, goal):
     return numpy.array([(0.0, 0.0)] + points[1:-1] + [tuple(goal)])
 
 
-def _descend(steps, start, goal_cell, limit_m=math.inf, keep=None):
-    """The cells down the wave ``steps`` (rows of ints) from ``start``: to the goal's, or until ``limit_m`` of way
-    or the first cell for which ``keep`` (if given) is False (that cell left out). Many ways are equally short on
-    a grid; of the steps down, the one nearest to the goal in a straight line is taken, so in the open the way
-    is on the goal's line."""
-    grid = steps
-    rows, cols = len(grid), len(grid[0])
-    i, j = start
-    gi, gj = goal_cell
-    travelled = 0.0
-    cells = [start]
-    here = grid[i][j]
-    while here > 0 and travelled < limit_m:
-        best = None
-        for di, dj in _NEIGHBOURS:
-            ni, nj = i + di, j + dj
-            if 0 <= ni < rows and 0 <= nj < cols and grid[ni][nj] < here:
-                key = (grid[ni][nj], (gi - ni) ** 2 + (gj - nj) ** 2)
-                if best is None or key < best[0]:
-                    best = (key, ni, nj)
-        if best is None:
-            break
-        _, ni, nj = best
-        travelled += CELL_M * math.hypot(ni - i, nj - j)
-        i, j = ni, nj
-        if keep is not None and not keep((i, j)):
-            break
-        cells.append((i, j))
-        here = grid[i][j]
-    return cells
-
-
 def _farthest_on_line(passable, start, corridor, origin, goal_xy):
     """The cell and the point (x, y) of the goal, or of the farthest point before it on the corridor's line
     (from the robot's projection on it) that passable cells connect to ``start``; (None, None) if none
@@ -269,13 +215,23 @@ def _farthest_on_line(passable, start, corridor, origin, goal_xy):
 
 def _in_sight(passable, a, b):
     """True if every cell on the straight line from cell ``a`` to cell ``b`` is passable."""
-    n = max(abs(b[0] - a[0]), abs(b[1] - a[1])) * 2
-    if n == 0:
-        return True
-    t = numpy.arange(n + 1) / n
-    ii = numpy.round(a[0] + (b[0] - a[0]) * t).astype(numpy.intp)
-    jj = numpy.round(a[1] + (b[1] - a[1]) * t).astype(numpy.intp)
-    return bool(passable[ii, jj].all())
+    return _kernel().in_sight(passable, a, b)
+
+
+def prepare():
+    """The compiled wave loaded (and compiled, on a machine's first use: about a second) before the first way is
+    asked for: a controller calls it as it is made, so its first decision is not the one that waits."""
+    passable = numpy.ones((1, 2), bool)
+    kernel = _kernel()
+    k, steps = kernel.wave(passable, (0, 0), (0, 1), WAVE_ROUNDS)
+    kernel.descend(steps, (0, 0), (0, 1), CELL_M, math.inf, passable)
+    kernel.in_sight(passable, (0, 0), (0, 1))
+
+
+def _kernel():
+    """The compiled wave (``wave_kernel``), imported with the first way asked for: numba costs a process about
+    0.1 s and 60 MB, which a sweep's own process (that imports the controllers) need not pay."""
+    return importlib.import_module('closed_loop.control.wave_kernel')
 
 
 def _nearest_passable(passable, cell):

@@ -17,6 +17,7 @@ import time
 
 import numpy
 
+from closed_loop.control import wavefront
 from closed_loop.control.drawing import Drawing, Goal, Route, Shape
 from closed_loop.control.guard import scan_points
 from closed_loop.control.local_planner import NavigatorError
@@ -49,6 +50,7 @@ class AvoidObstacles(Controller):
 
     def __init__(self, settings, context, goal_settings=None, *extra_settings):
         Controller.__init__(self, settings, context)
+        wavefront.prepare()         # the compiled wave loaded now, not at the first decision
         self.goal_settings = goal_settings or GoalSettings()
         self.extra_settings = extra_settings
         self.navigator = None       # made at the first odometry, which gives the start pose

@@ -46,6 +46,9 @@ class PlanarRays:
                        float((self._z + self._half_height).min(initial=numpy.inf)))
         self._none = numpy.empty(0)
         self._no_order = numpy.empty(0, dtype=numpy.int64)
+        # The compiled loop loaded now (compiled, on a machine's first use: about half a second), not at the
+        # first scan.
+        self.cast(None, (0.0, 0.0, 1.0), numpy.array([[1.0, 0.0, 0.0]]), 1.0, fan=(0.0, 1.0))
 
     def cast(self, centres, origin, dirs, range_max, cull=True, fan=None):
         """Distances (N,) from ``origin`` (x, y, z) along ``dirs`` ((N, 3) unit vectors, near the horizontal)
