@@ -75,3 +75,11 @@ if [ ! -f "$ws/devel/setup.bash" ] || [ "$(cat "$build_stamp" 2>/dev/null)" != "
     || { tail -n 40 "$ws/catkin_make.log"; echo "provision: catkin_make failed (log: $ws/catkin_make.log)" >&2; exit 1; }
   echo "$want" > "$build_stamp"
 fi
+
+# The compiled loops (numba: the LIDAR's planar caster, the navigator's wave), compiled into the source tree's
+# __pycache__ once here, not by the first processes of a test run, all at once. Loading them when they are
+# there takes a fraction of a second.
+PYTHONPATH="$root/src" "$venv/bin/python3" -c 'from closed_loop.control import wavefront
+from closed_loop.sim.planar_rays import PlanarRays
+wavefront.prepare()
+PlanarRays([])'
