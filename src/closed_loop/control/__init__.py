@@ -2,11 +2,11 @@
 
 Scan geometry (``scan``), the stop/slow/cruise rule (``decisions``), the lesson's state machine
 (``state_machine``), the loop's shared settings and staleness rule (``loop``), the reactive navigator
-(``navigator``) over its local planner (``local_planner``, ``wavefront`` and its compiled ``wave_kernel``,
-``clearance_field``, ``scan_memory``), the command guard (``guard``), tracking and fusion (``tracking``,
-``fusion``, ``fusion_navigator``), red-object vision (``vision``), what a controller draws (``drawing``) and
-the command arrow (``markers``).
+(``navigator``) over its local planner (``local_planner``, ``wavefront``, ``clearance_field``,
+``scan_memory``, and their compiled loops ``wave_kernel`` and ``arc_kernel``), the command guard (``guard``),
+tracking and fusion (``tracking``, ``fusion``, ``fusion_navigator``), red-object vision (``vision``), what a
+controller draws (``drawing``) and the command arrow (``markers``).
 
-May import: numpy, cv2, numba (``wave_kernel`` only) and the package's shared helpers. Never pybullet,
-``sim``, ``controllers``, ``batch`` or ``nodes``.
+May import: numpy, cv2, numba (the ``*_kernel`` modules only) and the package's shared helpers. Never
+pybullet, ``sim``, ``controllers``, ``batch`` or ``nodes``.
 """

@@ -4,6 +4,7 @@ samples along the footprint's outline, with a measured bound on how far a readin
 truth, and the exact check for the candidates that bound leaves in doubt. Free of ROS.
 """
 import functools
+import importlib
 import math
 
 import cv2
@@ -108,17 +109,15 @@ def clearances(field, shape, poses, step_m):
     ``poses`` (C, K, 3): (C, K)."""
     if field.flat is None:
         return numpy.full(poses.shape[:2], math.inf)
-    # In grid cells from the square's corner, so each of the C x K x M points costs the fewest operations;
-    # laid out (M, C, K), so the least over the outline is taken across whole slices (a reduction along a
-    # short last axis costs several times more), with 32-bit indices (the square has far fewer cells).
+    # In grid cells from the square's corner, float32 (the square has far fewer cells than that resolves), the
+    # least over the outline's points at each pose taken in one compiled call (``arc_kernel``); the yaws'
+    # cosines and sines from numpy.
     k = numpy.float32(1.0 / field.cell)
-    offset = numpy.float32(field.half + 0.5)
-    c, s = numpy.cos(poses[..., 2]), numpy.sin(poses[..., 2])
-    sx, sy = (shape[:, 0] * k)[:, None, None], (shape[:, 1] * k)[:, None, None]
-    ix = (poses[..., 0] * k + offset) + c * sx - s * sy
-    iy = (poses[..., 1] * k + offset) + s * sx + c * sy
-    flat = iy.astype(numpy.int32) * numpy.int32(field.size) + ix.astype(numpy.int32)
-    return edge_clearance(field.flat.take(flat, mode='clip').min(axis=0), step_m)
+    yaw = poses[..., 2]
+    least = importlib.import_module('closed_loop.control.arc_kernel').least_on_outline(
+        field.flat, field.size, poses, numpy.cos(yaw), numpy.sin(yaw), shape[:, 0] * k, shape[:, 1] * k, k,
+        numpy.float32(field.half + 0.5))
+    return edge_clearance(least, step_m)
 
 
 def keeps_margin(points, footprint, poses, margin):

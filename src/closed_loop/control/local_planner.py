@@ -27,6 +27,7 @@ of ROS.
 """
 import dataclasses
 import functools
+import importlib
 import math
 
 import numpy
@@ -94,35 +95,24 @@ class Plan:
 
 
 def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
-    """Poses (C, K, 3) for candidates ``v``, ``w`` (C,) from (v0, w0): speeds move toward the candidate at the
-    accelerations for ``horizon_s``, then to zero at the same rates; K = ``steps`` poses, PREDICTION_STEP_S
-    apart (the speed of each step is the one reached at its end: the pose runs slightly ahead)."""
-    dt = step_s
-    t = numpy.arange(1, steps + 1) * dt
-    follow = int(numpy.count_nonzero(t <= horizon_s + 1e-9))     # the steps within the horizon come first
-    during, then = t[:follow], t[follow:] - horizon_s
+    """Poses (C, K, 3) float32 for candidates ``v``, ``w`` (C,) from (v0, w0): speeds move toward the candidate
+    at the accelerations for ``horizon_s``, then to zero at the same rates; K = ``steps`` poses,
+    PREDICTION_STEP_S apart (the speed of each step is the one reached at its end: the pose runs slightly
+    ahead). Compiled: ``arc_kernel``."""
+    return importlib.import_module('closed_loop.control.arc_kernel').predict(
+        float(v0), float(w0), numpy.ascontiguousarray(v, float), numpy.ascontiguousarray(w, float),
+        float(settings.accel), float(settings.yaw_accel), float(horizon_s), int(steps), float(step_s))
 
-    count = len(v)
-    # Both speeds at once (the forward ones in the first C rows, the turn rates in the next C; the same
-    # arithmetic, element by element, in half the array operations): a ramp toward the candidate, then from
-    # where the ramp is at the horizon to zero.
-    start, rate = numpy.empty((2 * count, 1)), numpy.empty((2 * count, 1))
-    start[:count], start[count:], rate[:count], rate[count:] = v0, w0, settings.accel, settings.yaw_accel
-    change = numpy.concatenate((numpy.asarray(v, float), numpy.asarray(w, float)))[:, None] - start
-    along = start + numpy.minimum(numpy.maximum(change, -rate * during), rate * during)
-    at_end = start + numpy.minimum(numpy.maximum(change, -rate * horizon_s), rate * horizon_s)
-    after = numpy.sign(at_end) * numpy.maximum(numpy.abs(at_end) - rate * then, 0.0)
-    both = numpy.concatenate((along, after), axis=1)
-    vs, ws = both[:count], both[count:]
-    out = numpy.empty((3, count, steps))
-    numpy.cumsum(ws * dt, axis=1, out=out[2])
-    mid = out[2] - 0.5 * ws * dt
-    steps_xy = numpy.empty((2, count, steps))
-    numpy.multiply(vs, numpy.cos(mid), out=steps_xy[0])
-    numpy.multiply(vs, numpy.sin(mid), out=steps_xy[1])
-    steps_xy *= dt
-    numpy.cumsum(steps_xy, axis=2, out=out[:2])
-    return out.transpose(1, 2, 0).astype(numpy.float32, order='C')
+
+def prepare():
+    """The planner's compiled parts (``arc_kernel``, the way's ``wave_kernel``) loaded, and compiled on a
+    machine's first use (about two seconds), before a decision asks for them: a controller calls it as it is
+    made, so its first decision is not the one that waits."""
+    wavefront.prepare()
+    kernel = importlib.import_module('closed_loop.control.arc_kernel')
+    poses = kernel.predict(0.0, 0.0, numpy.zeros(1), numpy.zeros(1), 1.0, 1.0, 0.1, 1, 0.1)
+    one, none = numpy.ones((1, 1), numpy.float32), numpy.zeros(1, numpy.float32)
+    kernel.least_on_outline(none, 1, poses, one, one, none, none, numpy.float32(1.0), numpy.float32(0.5))
 
 
 @functools.lru_cache(maxsize=8)

@@ -17,10 +17,9 @@ import time
 
 import numpy
 
-from closed_loop.control import wavefront
 from closed_loop.control.drawing import Drawing, Goal, Route, Shape
 from closed_loop.control.guard import scan_points
-from closed_loop.control.local_planner import NavigatorError
+from closed_loop.control.local_planner import NavigatorError, prepare
 from closed_loop.control.loop import stale_input
 from closed_loop.control.markers import arrow_end
 from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger
@@ -50,7 +49,7 @@ class AvoidObstacles(Controller):
 
     def __init__(self, settings, context, goal_settings=None, *extra_settings):
         Controller.__init__(self, settings, context)
-        wavefront.prepare()         # the compiled wave loaded now, not at the first decision
+        prepare()                   # the planner's compiled parts loaded now, not at the first decision
         self.goal_settings = goal_settings or GoalSettings()
         self.extra_settings = extra_settings
         self.navigator = None       # made at the first odometry, which gives the start pose
