@@ -29,7 +29,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), 
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop.batch import sweep, sweep_file
-from closed_loop import tune_thresholds  # noqa: E402
+from closed_loop.batch import tune_thresholds  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 from closed_loop.sim.rig import Rig  # noqa: E402
