@@ -246,7 +246,8 @@ def test_the_command_writes_barn_worlds_with_their_metrics(tmp_path):
     assert generators.main(args) == 0
     files = sorted(os.listdir(tmp_path))
     assert files == ['barn_jackal_f042_m2_s7.yaml', 'barn_jackal_f042_m2_s8.yaml']
-    text = open(os.path.join(tmp_path, files[0])).read()
+    with open(os.path.join(tmp_path, files[0])) as f:
+        text = f.read()
     assert '--method barn' in text and '--seed 7' in text and '# BARN difficulty metrics' in text
     assert 'tortuosity' in text and 'characteristic dimension' in text
     world = load_world(os.path.join(tmp_path, files[0]), footprint=JACKAL.footprint)

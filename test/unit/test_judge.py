@@ -17,7 +17,7 @@ def drive(judge, track, dt=0.1):
     t = 0.0
     for x, speed, command, mode in track:
         if command is not None:
-            judge.on_command()
+            judge.on_command(command)
         if judge.due(t) and judge.observe(t, x, 0.0, 0.0, speed, 0.0, command, mode):
             break
         t += dt
@@ -45,7 +45,7 @@ def test_a_robot_rocking_where_it_came_to_rest_is_at_rest_and_one_that_moves_off
             speed = 0.5 if i < 10 else (0.0 if i == 11 or not rock else 0.01 * (-1) ** i)
             w = 0.0 if i <= 11 or not rock else yaw_rate * (-1) ** i
             command = (0.5, 0.0) if i < 10 else (0.0, 0.0)
-            judge.on_command()
+            judge.on_command(command)
             if judge.due(t) and judge.observe(t, x, 0.0, 0.0, speed, w, command, None):
                 break
             t += 0.1
@@ -64,8 +64,9 @@ def test_a_zero_command_is_needed_for_rest_and_no_command_counts_as_zero():
 
 
 def test_at_rest_within_the_radius_is_reached_and_a_navigator_waiting_elsewhere_is_not_stopped():
-    near = drive(Judge(JudgeSettings(), goal=(1.2, 0.0)), [(1.0, 0.0, (0.0, 0.0), None)] * 20)
-    assert near.outcome == 'reached' and near.goal_error_m == pytest.approx(0.2)
+    # (given only zeros, it is judged once first_command_wait is over, at the time it came to rest)
+    near = drive(Judge(JudgeSettings(), goal=(1.2, 0.0)), [(1.0, 0.0, (0.0, 0.0), None)] * 40)
+    assert near.outcome == 'reached' and near.goal_error_m == pytest.approx(0.2) and near.time_s == 0.0
     waiting = drive(Judge(JudgeSettings(end_at_rest=False, time_limit=5.0), goal=(5.0, 0.0)),
                     [(1.0, 0.0, (0.0, 0.0), None)] * 60)
     assert waiting.outcome == 'timed_out' and waiting.time_s == pytest.approx(5.0)
@@ -148,7 +149,7 @@ def test_a_robot_no_command_has_reached_yet_is_not_stopped_before_the_first_comm
     for step in range(45):                      # no command for 1.5 s (at rest), then driving at 0.5 m/s
         command = None if step < 15 else (0.5, 0.0)
         if command is not None:
-            judge.on_command()
+            judge.on_command(command)
         if judge.due(t) and judge.observe(t, 0.0, 0.0, 0.0, 0.0 if command is None else 0.5, 0.0, command, None):
             break
         t += 0.1
@@ -157,6 +158,18 @@ def test_a_robot_no_command_has_reached_yet_is_not_stopped_before_the_first_comm
     silent = drive(Judge(JudgeSettings(first_command_wait=3.0)), [(0.0, 0.0, None, None)] * 60)
     assert silent.outcome == 'stopped' and silent.why.endswith('no command ever reached the base')
     assert silent.time_s == 0.0            # at rest from the start: the wait delays the verdict, not its time
+
+
+def test_a_robot_given_only_zeros_so_far_is_not_stopped_before_the_first_command_wait():
+    """A controller that sends zeros until its first scan and odometry (a user's C++ node, seen judged 'stopped'
+    at its start line on a loaded machine at real_time_factor 4) drives off once they come; one that only
+    ever sends zeros is still judged stopped once the wait is over, at the time it came to rest."""
+    waiting = [(0.0, 0.0, (0.0, 0.0), None)] * 15 + [(0.05 * i, 0.5, (0.5, 0.0), None) for i in range(30)]
+    judge = Judge(JudgeSettings(first_command_wait=3.0, time_limit=4.0))
+    verdict = drive(judge, waiting)
+    assert verdict.outcome == 'timed_out' and judge.moves == verdict.commands - 15 > 0, verdict
+    still = drive(Judge(JudgeSettings(first_command_wait=3.0)), [(0.0, 0.0, (0.0, 0.0), None)] * 60)
+    assert still.outcome == 'stopped' and still.time_s == 0.0 and still.commands > 0, still
 
 
 def test_due_from_is_where_due_turns_true_and_never_once_it_is_over():

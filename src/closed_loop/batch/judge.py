@@ -48,9 +48,9 @@ class JudgeSettings:
                                       'of where it came to rest (a base held at zero rocks on its wheels)',
                                       minimum=0.0)
     rest_hold: float = param(1.0, 's', 'at rest this long ends the scenario (see end_at_rest)', minimum=0.0)
-    first_command_wait: float = param(3.0, 's', 'a robot no command has reached yet is not judged at rest before '
-                                      "this simulated time (a graph's controller may answer its first scan late "
-                                      'at a high real_time_factor)', minimum=0.0)
+    first_command_wait: float = param(3.0, 's', 'a robot no command to move has reached yet (none, or only zeros) '
+                                      'is not judged at rest before this simulated time (a graph\'s controller may '
+                                      'answer its first scan late at a high real_time_factor)', minimum=0.0)
     end_at_rest: bool = param(True, '', 'true: at rest for rest_hold anywhere ends it (stopped); false: only '
                               'within success_radius of the goal (a navigator that waits and goes on)')
     end_on_contact: bool = param(False, '', 'end at the first contact (outcome collided)')
@@ -141,6 +141,7 @@ class Judge:
         self.goal = None if goal is None else (float(goal[0]), float(goal[1]))
         self.contacts = 0
         self.commands = 0
+        self.moves = 0               # the commands among them that were not zero
         self.clearance = math.inf
         self.path_m = 0.0
         self.peak_decel = 0.0
@@ -172,9 +173,11 @@ class Judge:
         if count and self.settings.end_on_contact and not self.ended:
             self._end(t_s)
 
-    def on_command(self):
-        """The base was given a command."""
+    def on_command(self, command):
+        """The base was given a command, (m/s, rad/s)."""
         self.commands += 1
+        if command[0] != 0.0 or command[1] != 0.0:
+            self.moves += 1
 
     def on_clearance(self, clearance_m):
         self.clearance = min(self.clearance, clearance_m)
@@ -212,7 +215,7 @@ class Judge:
         if self.mode in (REACHED, FAILED) and at_rest:
             self._end(t_s)
         elif self._rest_since is not None and t_s - self._rest_since >= s.rest_hold - 1e-9 \
-                and (near_goal or s.end_at_rest) and (self.commands or t_s >= s.first_command_wait - 1e-9):
+                and (near_goal or s.end_at_rest) and (self.moves or t_s >= s.first_command_wait - 1e-9):
             self._rest_end = True
             self._end(self._rest_since)
         elif t_s >= s.time_limit - 1e-9:

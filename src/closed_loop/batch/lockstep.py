@@ -163,7 +163,7 @@ def _loop(spec, rig, controller, judge, tap):
                 _, cmd = pending.pop(0)
                 command = (cmd.linear_x, cmd.angular_z)
                 sim.command(cmd)
-                judge.on_command()
+                judge.on_command(command)
             apply_at = pending[0][0] if pending else never
         sim.step()
         began = contacts.sample(sim)

@@ -7,6 +7,6 @@ Scan geometry (``scan``), the stop/slow/cruise rule (``decisions``), the lesson'
 tracking and fusion (``tracking``, ``fusion``, ``fusion_navigator``), red-object vision (``vision``), what a
 controller draws (``drawing``) and the command arrow (``markers``).
 
-May import: numpy, cv2, numba (the ``*_kernel`` modules only) and the package's shared helpers. Never
-pybullet, ``sim``, ``controllers``, ``batch`` or ``nodes``.
+May import: numpy, cv2 and the package's shared helpers (``closed_loop.compiled``: numba's, for the
+``*_kernel`` modules). Never pybullet, ``sim``, ``controllers``, ``batch`` or ``nodes``.
 """

@@ -4,16 +4,16 @@ they reach, integrated step by step. As numpy array operations a prediction was 
 of a few hundred elements; here it is one call, with the same arithmetic in the same order (sums taken one
 step after another, as numpy's cumulative sum takes them), so the poses are the same to the bit.
 
-Compiled by numba once per machine into ``__pycache__`` (or numba's cache directory where that cannot be
-written). Free of ROS.
+Compiled by numba (``closed_loop.compiled``). Free of ROS.
 """
 import math
 
-import numba
 import numpy
 
+from closed_loop.compiled import jit
 
-@numba.njit(cache=True, nogil=True)
+
+@jit
 def _speed(start, change, rate, t, horizon_s, within):
     """The speed at time ``t`` of a ramp from ``start`` toward ``start + change`` at ``rate``: within the
     horizon, toward it; after, from where it was at the horizon toward zero."""
@@ -24,7 +24,7 @@ def _speed(start, change, rate, t, horizon_s, within):
     return sign * max(abs(at_end) - rate * (t - horizon_s), 0.0)
 
 
-@numba.njit(cache=True, nogil=True)
+@jit
 def predict(v0, w0, v, w, accel, yaw_accel, horizon_s, steps, step_s):
     """Poses (C, K, 3) float32, (x, y, yaw) from the robot, for candidates ``v``, ``w`` (C,) from speeds (v0,
     w0); K = ``steps`` poses ``step_s`` apart, each step at the speeds reached at its end."""
@@ -48,7 +48,7 @@ def predict(v0, w0, v, w, accel, yaw_accel, horizon_s, steps, step_s):
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@jit
 def least_on_outline(field, size, poses, cos_yaw, sin_yaw, outline_x, outline_y, scale, offset):
     """(C, K) float32: the least of ``field`` (a distance field's cells, flat, ``size`` a row) over the
     outline's points (``outline_x``, ``outline_y``, in cells) at each of ``poses`` (C, K, 3) float32, its

@@ -3,17 +3,17 @@ cell over passable cells, alternating 8- and 4-neighbour steps (the octagonal di
 reached the start's cell. As OpenCV calls it was four calls a round, about 30 rounds a wave, each call's fixed
 cost far above its few hundred cells' work; here it is one call, and the same rounds to the cell.
 
-Compiled by numba once per machine into ``__pycache__`` (or numba's cache directory where that cannot be
-written). Free of ROS.
+Compiled by numba (``closed_loop.compiled``). Free of ROS.
 """
-import numba
 import numpy
+
+from closed_loop.compiled import jit
 
 #: A cell the wave has not reached.
 UNREACHED = numpy.iinfo(numpy.int32).max
 
 
-@numba.njit(cache=True, nogil=True)
+@jit
 def wave(passable, start, goal, rounds):
     """(k, steps): ``steps`` (rows, columns) int32, the round each passable cell was reached in (the goal's cell
     in round 0; UNREACHED where it was not), and ``k`` the round the ``start`` cell was reached in; k = -1 when
@@ -51,7 +51,7 @@ def wave(passable, start, goal, rounds):
     return k, steps
 
 
-@numba.njit(cache=True, nogil=True)
+@jit
 def in_sight(passable, a, b):
     """True if every cell on the straight line from cell ``a`` to cell ``b`` ((row, column)) is passable: the
     line sampled at twice the cells it crosses, each sample rounded to its cell (half to even)."""
@@ -65,7 +65,7 @@ def in_sight(passable, a, b):
     return True
 
 
-@numba.njit(cache=True, nogil=True)
+@jit
 def descend(steps, start, goal, cell_m, limit_m, sight):
     """The cells ((N, 2) row, column) down the wave ``steps`` from ``start``: to the ``goal`` cell, or until
     ``limit_m`` of way (cells ``cell_m`` wide) or the first cell not in sight of the start through the cells

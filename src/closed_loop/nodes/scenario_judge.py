@@ -76,7 +76,7 @@ class ScenarioJudge:
             self.command = (msg.linear.x, msg.angular.z, rospy.Time.now().to_sec())
             if not self.judge.commands:
                 rospy.loginfo('first command: linear.x %.3f m/s, angular.z %.3f rad/s', msg.linear.x, msg.angular.z)
-            self.judge.on_command()
+            self.judge.on_command((msg.linear.x, msg.angular.z))
 
     def _on_mode(self, msg):
         with self.lock:

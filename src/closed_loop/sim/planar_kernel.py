@@ -2,14 +2,14 @@
 the rays of its angular window, each pair by its shape's ray test (:func:`_hit`, a branch per
 ``shapes.SHAPES[shape].RAY_KIND``), the nearest hit of each ray kept.
 
-Compiled by numba once per machine into ``__pycache__`` (or numba's cache directory where that cannot be
-written), with IEEE arithmetic (a division by zero is inf, as in numpy) and no reordering of float operations,
-so every way of matching rays to obstacles gives the same distances to the bit. Free of ROS.
+Compiled by numba (``closed_loop.compiled``): every way of matching rays to obstacles gives the same distances
+to the bit. Free of ROS.
 """
 import math
 
-import numba
 import numpy
+
+from closed_loop.compiled import jit
 
 #: A ray this close (rad) to the edge of an obstacle's angular window is still tested against it.
 WINDOW_MARGIN_RAD = 1e-9
@@ -18,10 +18,8 @@ TWO_PI = 2.0 * math.pi
 #: windows searched in the sorted bearings.
 EVERY, FAN, SORTED = 0, 1, 2
 
-_compile = numba.njit(cache=True, error_model='numpy', nogil=True)
 
-
-@_compile
+@jit
 def _hit(kind, params, m, rel_x, rel_y, fx, fy):
     """Distance along the ray (unit direction ``fx``, ``fy``) from the origin to obstacle ``m`` (its centre at
     ``rel_x``, ``rel_y`` from the origin; its shape's ``kind`` and ``params`` row), inf where it misses (or
@@ -45,7 +43,7 @@ def _hit(kind, params, m, rel_x, rel_y, fx, fy):
     return t if t >= 0.0 else numpy.inf
 
 
-@_compile
+@jit
 def _take(kind, params, m, rel_x, rel_y, z, az, half_height, fx, fy, level, rise, drift, check_height, r, best):
     """Ray ``r`` tested against obstacle ``m``: its hit kept in ``best`` where nearer and within the height."""
     along = _hit(kind, params, m, rel_x, rel_y, fx[r], fy[r])
@@ -59,7 +57,7 @@ def _take(kind, params, m, rel_x, rel_y, z, az, half_height, fx, fy, level, rise
         best[r] = along
 
 
-@_compile
+@jit
 def cast(kinds, params, ax, ay, az, half_heights, radii, x, y, z, fx, fy, level, rise, drift, range_max,
           check_height, mode, first, increment, bearings, order, best):
     """Every obstacle in range against the rays of its window (``mode``), the nearest hit kept in ``best``."""
