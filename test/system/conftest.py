@@ -74,6 +74,16 @@ def _descends(pid, ancestor):
     return False
 
 
+def _runs_master(pid, port):
+    """Whether process ``pid`` is still a ROS master on ``port`` (not a new process given the same number)."""
+    try:
+        with open('/proc/%d/cmdline' % pid, 'rb') as f:
+            argv = f.read().split(b'\0')
+    except OSError:
+        return False
+    return any(b'rosmaster' in a for a in argv) and str(port).encode() in argv
+
+
 def stop(process, sig=signal.SIGINT, timeout_s=20.0):
     """End a process group started with start_new_session=True: ``sig``, then SIGKILL, and SIGKILL to whatever
     of the group outlived its leader."""
@@ -118,11 +128,20 @@ def roscore(tmp_path):
     env = ros_env(tmp_path, port)
     process = subprocess.Popen(['roscore', '-p', str(port)], env=env, stdout=subprocess.DEVNULL,
                                stderr=subprocess.STDOUT, start_new_session=True)
+    master = None
     try:
         wait_master(port, process)
+        master = master_pid(port)
         yield env
     finally:
         stop(process)
+        # roslaunch runs the master in a session of its own: where roslaunch did not end it in time (a test
+        # stopped the master a while; a loaded machine), it would outlive the group's SIGKILL.
+        if master is not None and _runs_master(master, port):
+            try:
+                os.kill(master, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
 
 
 def doc_code(page, after):
