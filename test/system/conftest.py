@@ -74,14 +74,20 @@ def _descends(pid, ancestor):
     return False
 
 
-def _runs_master(pid, port):
-    """Whether process ``pid`` is still a ROS master on ``port`` (not a new process given the same number)."""
-    try:
-        with open('/proc/%d/cmdline' % pid, 'rb') as f:
-            argv = f.read().split(b'\0')
-    except OSError:
-        return False
-    return any(b'rosmaster' in a for a in argv) and str(port).encode() in argv
+def _logging_under(folder):
+    """The pids of the processes whose arguments name a log under ``folder`` (a graph's ROS_LOG_DIR: its
+    master's and its nodes' ``__log:=``)."""
+    mark = ('__log:=' + folder + os.sep).encode()
+    found = []
+    for name in os.listdir('/proc'):
+        if name.isdigit():
+            try:
+                with open('/proc/%s/cmdline' % name, 'rb') as f:
+                    if any(arg.startswith(mark) for arg in f.read().split(b'\0')):
+                        found.append(int(name))
+            except OSError:
+                pass
+    return found
 
 
 def stop(process, sig=signal.SIGINT, timeout_s=20.0):
@@ -128,18 +134,17 @@ def roscore(tmp_path):
     env = ros_env(tmp_path, port)
     process = subprocess.Popen(['roscore', '-p', str(port)], env=env, stdout=subprocess.DEVNULL,
                                stderr=subprocess.STDOUT, start_new_session=True)
-    master = None
     try:
         wait_master(port, process)
-        master = master_pid(port)
         yield env
     finally:
         stop(process)
-        # roslaunch runs the master in a session of its own: where roslaunch did not end it in time (a test
-        # stopped the master a while; a loaded machine), it would outlive the group's SIGKILL.
-        if master is not None and _runs_master(master, port):
+        # roslaunch runs the master and rosout in sessions of their own: where roslaunch did not end them in
+        # time (a test stopped the master a while; a loaded machine), they would outlive the group's SIGKILL.
+        # Each was started with its log under this graph's ROS_LOG_DIR.
+        for pid in _logging_under(env['ROS_LOG_DIR']):
             try:
-                os.kill(master, signal.SIGKILL)
+                os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:
                 pass
 
