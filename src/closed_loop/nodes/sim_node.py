@@ -21,7 +21,7 @@ from closed_loop import robot_model
 from closed_loop.nodes import sensor_messages as to_msgs
 from closed_loop.nodes.common import LOG_PERIOD_S, Publisher, init_node, load_settings
 from closed_loop.nodes.conversions import connected_publishers, message_callerid
-from closed_loop.sim.scheduler import Schedule, SchedulingSettings
+from closed_loop.sim.scheduler import ClockSchedule, Schedule, SchedulingSettings
 from closed_loop.sim.sensors.camera import Camera
 from closed_loop.sim.sensors.clearance import Clearance
 from closed_loop.sim.sensors.contacts import Contacts
@@ -175,7 +175,8 @@ class SimNode:
             a second node publishing on cmd_vel is reported (throttled, naming both).
     Publishes:
         clock (rosgraph_msgs/Clock): simulated time, after every physics step at real time (at most
-            ``~max_clock_rate_hz`` per wall second when faster), and before every scan and camera frame.
+            ``~max_clock_rate_hz`` per wall second on average when faster), and before every scan and
+            camera frame.
         scan (sensor_msgs/LaserScan): frame base_scan; REP 117 (+inf no return, -inf closer than range_min).
         camera/image_raw (sensor_msgs/Image, rgb8) and camera/camera_info (sensor_msgs/CameraInfo),
             frame camera_optical_frame; off with ``~camera:=false``.
@@ -305,8 +306,7 @@ class SimNode:
                 schedule.add(name, sensor.period_s, sensor.offset_s)
                 tasks[name] = (port, line, sensor)
         wall_ref, sim_ref = time.monotonic(), sim.time_s
-        clock_period_s = 1.0 / s.max_clock_rate_hz
-        next_clock_wall = time.monotonic()
+        clock = ClockSchedule(s, sim.dt_s, time.monotonic())
         self._publish_clock()
         while not self._stopped.is_set() and not rospy.is_shutdown():
             self._take_inputs()
@@ -316,14 +316,11 @@ class SimNode:
                 continue
             t = sim.step()
             due = [tasks[name] for name in schedule.due(t)]
-            now_wall = time.monotonic()
-            # /clock on a schedule of max_clock_rate_hz in wall time, with half a period of tolerance: at
-            # real time every step is sent (steps come one period apart, give or take the sleep's
-            # jitter); faster, at most that rate (every node on simulated time pays for each message, and
-            # sending every step would cost more than the physics); after a stall, no burst.
-            if any(line.clock_first for _, line, _ in due) or now_wall >= next_clock_wall - 0.5 * clock_period_s:
+            # Every node on simulated time pays for each /clock message: faster than real time, sending
+            # every step would cost more than the physics (closed_loop.sim.scheduler.ClockSchedule).
+            clock_due = clock.due(t, time.monotonic())
+            if clock_due or any(line.clock_first for _, line, _ in due):
                 self._publish_clock()
-                next_clock_wall = max(next_clock_wall + clock_period_s, now_wall)
             stamp = rospy.Time.from_sec(t)
             for port, line, sensor in due:
                 port.serve(line, sensor, stamp)

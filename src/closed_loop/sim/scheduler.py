@@ -11,8 +11,8 @@ class SchedulingSettings:
     real_time_factor: float = param(1.0, '', 'simulated seconds per wall second; 0 = as fast as possible',
                                     minimum=0.0)
     max_clock_rate_hz: float = param(100.0, 'Hz', '/clock is published after a physics step at most this '
-                                     'often per wall second (every step at real time; throttled when '
-                                     'faster), and always before a scan or camera frame',
+                                     'often per wall second on average (every step at real time; '
+                                     'throttled when faster), and always before a scan or camera frame',
                                      minimum=1.0)
     paused: bool = param(False, '', 'start with physics paused at t = 0 (/clock at 0, no sensor data) until '
                          '~unpause_physics is called (scenario.launch: its judge does, once the controller is up)')
@@ -44,3 +44,30 @@ class Schedule:
                 task[2] = next_s + period
                 names.append(name)
         return names
+
+
+class ClockSchedule:
+    """Whether /clock goes out after a physics step (besides before every scan and camera frame).
+
+    At a real-time factor, on simulated time: one message per ``real_time_factor / max_clock_rate_hz``
+    simulated seconds (every step at real time with the defaults), so that a loop catching up after a
+    stall sends what it owes and the wall-clock rate is ``max_clock_rate_hz`` on average. As fast as
+    possible (factor 0), on the wall clock: at most ``max_clock_rate_hz`` per wall second, with half a
+    period of tolerance, and no burst after a stall.
+    """
+
+    def __init__(self, settings, step_s, now_wall_s):
+        self._on_sim_time = settings.real_time_factor > 0
+        if self._on_sim_time:
+            self._schedule = Schedule(step_s)
+            self._schedule.add('clock', max(settings.real_time_factor / settings.max_clock_rate_hz, step_s))
+        self._period_s = 1.0 / settings.max_clock_rate_hz
+        self._next_wall_s = now_wall_s
+
+    def due(self, t_s, now_wall_s):
+        if self._on_sim_time:
+            return bool(self._schedule.due(t_s))
+        if now_wall_s < self._next_wall_s - 0.5 * self._period_s:
+            return False
+        self._next_wall_s = max(self._next_wall_s + self._period_s, now_wall_s)
+        return True
