@@ -382,6 +382,36 @@ def test_pushing_against_the_wall_stays_one_contact(make_sim):
     assert sim.contact_count == 1
 
 
+@pytest.mark.parametrize('post_y_m, touches', [(0.435, False), (0.42, True)])
+def test_a_contact_is_a_touch_not_a_point_bullet_lists_a_few_millimetres_apart(post_y_m, touches):
+    # Bullet lists contact points a few millimetres apart too, with their distance. A Jackal turning in place
+    # beside a post whose corner passes it about 4 mm away touches nothing; 1.5 cm nearer, it does.
+    import pybullet
+    from closed_loop.sim.profiles import load_profile
+    profile = load_profile('jackal')
+    post = {'name': 'post', 'type': 'cylinder', 'position': [0.0, post_y_m, 0.5], 'radius': 0.075, 'height': 1.0}
+    sim = SimWithSensors(Rig(parse_world({'name': 'post_beside', 'obstacles': [post]}),
+                             profile.node_params('sim'), profile.urdf))
+    try:
+        listed, began, least = [], [], 1.0
+        for i in range(steps_for(sim, 8.0)):
+            if i % steps_for(sim, COMMAND_PERIOD_S) == 0:
+                sim.command(VelocityCommand(0.0, 0.8))
+            sim.step()
+            began += sim.new_contacts()
+            least = min(least, sim.clearance(0.1))
+            listed += [c[8] for c in pybullet.getContactPoints(bodyA=sim.robot_id, physicsClientId=sim.client)
+                       if c[2] != sim.ground_id]
+        assert listed
+        if touches:
+            assert began == ['post'] and least <= 0.001
+        else:
+            assert min(listed) > 0.001 and least > 0.001
+            assert began == [] and sim.contact_count == 0
+    finally:
+        sim.close()
+
+
 def test_reset_after_a_contact_clears_the_count(make_sim):
     sim = make_sim(world('wall'))
     drive_until_contact(sim)

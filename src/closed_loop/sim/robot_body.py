@@ -29,6 +29,9 @@ ROOT_LINK_INERTIA_KGM2 = 1e-7
 #: that robot's rays leave out so a LIDAR never sees itself, while other robots' LIDARs see the housing.
 ALL_GROUPS = -1
 OWN_SENSOR_GROUP_BIT = 8
+#: A contact point this near (m; negative: inside) is a touch. Bullet reports points up to its breaking
+#: threshold apart: a Jackal 7 mm from a post was counted as in contact.
+CONTACT_TOUCH_M = 0.001
 
 
 @dataclass(frozen=True)
@@ -209,7 +212,8 @@ class Robot:
         return self._twist
 
     def contacts_with_obstacles(self):
-        """The names of the obstacles (and other robots) this robot is in contact with now (not the ground)."""
+        """The names of the obstacles (and other robots) this robot touches now (not the ground): within
+        CONTACT_TOUCH_M of it."""
         # Every body but the ground holds obstacles or another robot (called at every physics step: no lookup
         # unless there is a contact).
         # Not while the robot is provably clear of every obstacle (closed_loop.sim.contact_room), which needs
@@ -220,9 +224,11 @@ class Robot:
         if self._room and self._room.clear(*pybullet.getBasePositionAndOrientation(
                 self.robot_id, physicsClientId=self.sim.client)):
             return set()
+        # Bullet keeps a contact manifold's points while the bodies are within its breaking threshold (about
+        # 0.02 m) and reports them with their distance: only those within CONTACT_TOUCH_M touch.
         ground = self.sim.ground_id
         return {self.sim.name_at(c[2], c[6]) for c in self._call(pybullet.getContactPoints, bodyA=self.robot_id)
-                if c[2] != ground}
+                if c[2] != ground and c[8] <= CONTACT_TOUCH_M}
 
     def clearance(self, max_m):
         """Least distance (m) between this robot's collision shapes and any obstacle or other robot, looked
