@@ -5,7 +5,8 @@ in worlds made by the BARN benchmark's method.
 Run: ``python3 test/bench/bench_navigator.py`` inside ``source env.sh`` (``make bench`` does that).
 Options: ``--seeds N`` per fill ratio (default 10), ``--robot NAME`` (default jackal), ``-v`` a line per world,
 ``--method corridor|barn`` one set only (default: both; ``--seeds`` per fill, default 10 for the generated set
-and 50 for the BARN-method set: 300 worlds).
+and 50 for the BARN-method set: 300 worlds), ``--first-seed N`` the BARN-method set from seed N on (the default set,
+from 0, is the one the navigator's changes were judged on; a set from 1000 on is one they were not).
 
 Worlds: ``closed_loop.sim.clutter`` with fill ratios 0.2, 0.4, 0.6, 0.8 and 1.0 and seeds 0 .. N-1 (its default
 geometry: sites 1.1 m apart, narrowest gaps 1.3 robot widths, a corridor the robot fits at any heading).
@@ -108,12 +109,12 @@ class Recorder:
         return numpy.array(replays)
 
 
-def barn_worlds(seeds, profile, room_m):
+def barn_worlds(seeds, profile, room_m, first_seed=0):
     """[(the world's generator values, (its optimal way m, whether it has a way for the footprint with
-    ``room_m`` round it)], ``seeds`` per fill of BARN_FILLS."""
+    ``room_m`` round it)], ``seeds`` per fill of BARN_FILLS, from ``first_seed`` on."""
     worlds = []
     for fill in BARN_FILLS:
-        seed = 0
+        seed = first_seed
         for _ in range(seeds):
             for seed in range(seed, seed + BARN_SEED_TRIES):
                 values = {'method': 'barn', 'seed': seed, 'fill': fill, 'smoothing': 2}
@@ -146,6 +147,8 @@ def main():
     parser.add_argument('--seeds', type=int, default=None)
     parser.add_argument('--robot', default='jackal')
     parser.add_argument('--method', choices=('corridor', 'barn'), default=None)
+    parser.add_argument('--first-seed', type=int, default=0, help='the BARN-method set\'s seeds start here (a set the '
+                        'navigator was not tuned on: 1000)')
     parser.add_argument('-v', '--verbose', action='store_true')
     args = parser.parse_args()
     for method in [args.method] if args.method else ['corridor', 'barn']:
@@ -163,7 +166,7 @@ def run_set(method, args):
     # The room the window's way keeps each side of the robot: a world with no way that wide is one the navigator
     # cannot cross (its aim closes every gap narrower).
     room_m = navigator_module.NavigatorSettings().safety_margin + local_planner.AIM_ROOM_M
-    worlds = barn_worlds(seeds, profile, room_m) if barn_set else clutter_worlds(seeds, profile)
+    worlds = barn_worlds(seeds, profile, room_m, args.first_seed) if barn_set else clutter_worlds(seeds, profile)
     rows = collections.defaultdict(list)
     decisions = []
     recorder = Recorder(max(1, len(worlds) // REPLAY_RUNS))
