@@ -323,6 +323,32 @@ def test_turning_in_place_counter_clockwise(make_sim):
     assert left < 0.0 < right
 
 
+@pytest.mark.parametrize('cone', [True, False])
+def test_a_skid_steer_turn_in_place_and_the_friction_model(cone):
+    # The Jackal told 0.8 rad/s in place, a turn and a half: under pybullet's friction cone its rate swings with
+    # its heading in the world (it stalls near the world's axes); under the pyramid it is even.
+    from closed_loop.sim.profiles import load_profile
+    profile = load_profile('jackal')
+    sim = SimWithSensors(Rig(world('empty'), dict(profile.node_params('sim'), friction_cone=cone), profile.urdf))
+    try:
+        rates, last = [], None
+        for i in range(steps_for(sim, 10.0)):
+            if i % steps_for(sim, COMMAND_PERIOD_S) == 0:
+                sim.command(VelocityCommand(0.0, 0.8))
+                yaw = sim.ground_truth()[0].yaw
+                if last is not None and sim.time_s > 1.0:
+                    rates.append(math.atan2(math.sin(yaw - last), math.cos(yaw - last)) / COMMAND_PERIOD_S)
+                last = yaw
+            sim.step()
+        slowest, fastest = min(rates), max(rates)
+        if cone:
+            assert slowest < 0.3 < 1.0 < fastest
+        else:
+            assert 0.85 < slowest and fastest < 1.2
+    finally:
+        sim.close()
+
+
 def test_commands_beyond_the_limits_are_clipped(make_sim):
     sim = make_sim(world('empty'), max_linear_speed=0.3)
     run(sim, 1.0, VelocityCommand(5.0, 0.0))

@@ -47,6 +47,9 @@ class SimSettings:
     gui: bool = param(False, '', "open pybullet's own window (needs a display)")
     physics_rate_hz: float = param(100.0, 'Hz', 'physics steps per simulated second', minimum=10.0,
                                    maximum=2000.0)
+    friction_cone: bool = param(True, '', "pybullet's implicit friction cone (its default); false: the friction "
+                                'pyramid, under which a skid-steer base turns in place at the same rate at every '
+                                'heading (docs/simulator.md)')
     cmd_vel_timeout: float = param(0.5, 's', 'brake to zero when no command arrived for this long',
                                    minimum=0.0, maximum=5.0, exclusive_minimum=True)
     max_linear_speed: float = param(1.5, 'm/s', 'linear.x is clipped to +-this', minimum=0.0,
@@ -98,7 +101,7 @@ class Simulation:
     ``robots``: [:class:`RobotSetup`] for a multi-robot world; by default one robot, unnamed, from
     ``settings`` and ``urdf`` at the world's start. The one-robot interface (``command``, ``model``,
     ``ground_truth``, ``link_pose``, ...) is that of the first robot; :meth:`view` gives any robot's.
-    ``settings`` also holds what is the world's: ``physics_rate_hz`` and ``gui``.
+    ``settings`` also holds what is the world's: ``physics_rate_hz``, ``friction_cone`` and ``gui``.
     """
 
     def __init__(self, world, settings, urdf=None, robots=None, render=True):
@@ -145,7 +148,8 @@ class Simulation:
         self._call(p.resetSimulation)
         self._call(p.setGravity, 0, 0, -GRAVITY_MPS2)
         self._call(p.setTimeStep, self.dt_s)
-        self._call(p.setPhysicsEngineParameter, numSolverIterations=SOLVER_ITERATIONS)
+        self._call(p.setPhysicsEngineParameter, numSolverIterations=SOLVER_ITERATIONS,
+                   enableConeFriction=int(self.settings.friction_cone))
         if self.settings.gui:
             self._call(p.configureDebugVisualizer, p.COV_ENABLE_GUI, 0)
         ground_shape = self._call(p.createCollisionShape, p.GEOM_PLANE)
