@@ -125,7 +125,10 @@ def test_episode_bag_writes_a_clean_bag_that_replays_into_subscribers(swept, tmp
     try:
         assert listener.stdout.readline().strip() == 'ready'
         time.sleep(1.0)
-        play = subprocess.run(['rosbag', 'play', '-q', '-r', '5', '-d', '1', '--queue', '100000', str(bag_path)], env=env,
+        # --wait-for-subscribers: on a loaded machine the listener's connection to a topic came after its first
+        # messages (491 of 501 /base_pose_ground_truth in a fresh-clone run, with -d 1 alone).
+        play = subprocess.run(['rosbag', 'play', '-q', '-r', '5', '-d', '1', '--wait-for-subscribers', '--queue',
+                               '100000', str(bag_path)], env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
         assert play.returncode == 0, play.stdout
         got = json.loads(listener.communicate(timeout=150)[0].splitlines()[-1])
