@@ -19,6 +19,7 @@ import sys
 import tempfile
 import threading
 import time
+import uuid
 from xml.sax.saxutils import quoteattr
 
 import yaml
@@ -199,7 +200,7 @@ def run_graph(spec, prepared, folder=None, bag=None):
         launch_file = os.path.join(folder, 'episode.launch')
         with open(launch_file, 'w') as f:
             f.write(launch_text(spec, prepared, folder, bag))
-        mark = os.path.abspath(folder) + os.sep
+        mark = graph_mark(folder)
         env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
                    PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))),
                    **{launcher.MARK: mark})
@@ -223,6 +224,13 @@ def run_graph(spec, prepared, folder=None, bag=None):
         error = '%s: %s' % (c['launch'] if 'launch' in c else 'node ' + c['node'], error)
         return result_from_verdict(Verdict('error', why=error), error=error, logs=folder, wall_s=wall_s)
     return result_from_verdict(verdict, logs=folder, wall_s=wall_s, trajectory=track[0], contact_log=track[1])
+
+
+def graph_mark(folder):
+    """The mark (``launcher.MARK``) of one run of a graph in ``folder``: under the folder's path, and the run's own.
+    A worker that dies leaves its keeper to end its graph, and that keeper kills what carries its mark after a
+    grace of seconds; the episode, run again meanwhile in the same folder by another worker, carries another."""
+    return os.path.join(os.path.abspath(folder), 'run-%d-%s' % (os.getpid(), uuid.uuid4().hex))
 
 
 def _set_aside(folder):
