@@ -7,7 +7,8 @@ Options: ``--seeds N`` per fill ratio (default 10), ``--robot NAME`` (default ja
 ``--method corridor|barn`` one set only (default: both; ``--seeds`` per fill, default 10 for the generated set
 and 50 for the BARN-method set: 300 worlds), ``--first-seed N`` the BARN-method set from seed N on (the default set,
 from 0, is the one the navigator's changes were judged on; a set from 1000 on is one they were not),
-``--friction-pyramid`` the simulator's ``~friction_cone:=false`` (docs/simulator.md).
+``--friction-cone`` the simulator's ``~friction_cone:=true`` in place of the Jackal profile's friction pyramid
+(docs/simulator.md).
 
 Worlds: ``closed_loop.sim.clutter`` with fill ratios 0.2, 0.4, 0.6, 0.8 and 1.0 and seeds 0 .. N-1 (its default
 geometry: sites 1.1 m apart, narrowest gaps 1.3 robot widths, a corridor the robot fits at any heading).
@@ -150,7 +151,8 @@ def main():
     parser.add_argument('--method', choices=('corridor', 'barn'), default=None)
     parser.add_argument('--first-seed', type=int, default=0, help='the BARN-method set\'s seeds start here (a set the '
                         'navigator was not tuned on: 1000)')
-    parser.add_argument('--friction-pyramid', action='store_true', help='the simulator with ~friction_cone:=false')
+    parser.add_argument('--friction-cone', action='store_true',
+                        help="the simulator with ~friction_cone:=true (pybullet's default)")
     parser.add_argument('-v', '--verbose', action='store_true')
     args = parser.parse_args()
     for method in [args.method] if args.method else ['corridor', 'barn']:
@@ -183,7 +185,7 @@ def run_set(method, args):
             goal, group, optimal_s = extra, values['fill_ratio'], None
         result = run_episode(EpisodeSpec(world={'generator': values}, robot=profile.name,
                                          controller='avoid_obstacles', goal=goal, time_limit_s=TIME_LIMIT_S,
-                                         sim={'friction_cone': False} if args.friction_pyramid else {}))
+                                         sim={'friction_cone': True} if args.friction_cone else {}))
         decisions.extend(result.decision_ms)
         walls = sum(1 for o in raw['obstacles'] if o['type'] == 'wall')
         rows[group].append((result, len(raw['obstacles']) - walls,

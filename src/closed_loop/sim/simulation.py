@@ -48,8 +48,8 @@ class SimSettings:
     physics_rate_hz: float = param(100.0, 'Hz', 'physics steps per simulated second', minimum=10.0,
                                    maximum=2000.0)
     friction_cone: bool = param(True, '', "pybullet's implicit friction cone (its default); false: the friction "
-                                'pyramid, under which a skid-steer base turns in place at the same rate at every '
-                                'heading (docs/simulator.md)')
+                                'pyramid, under which a skid-steer base turns at the same rate at every heading '
+                                "(the Jackal profile's; docs/simulator.md)")
     cmd_vel_timeout: float = param(0.5, 's', 'brake to zero when no command arrived for this long',
                                    minimum=0.0, maximum=5.0, exclusive_minimum=True)
     max_linear_speed: float = param(1.5, 'm/s', 'linear.x is clipped to +-this', minimum=0.0,
