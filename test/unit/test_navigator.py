@@ -6,7 +6,7 @@ import cv2
 import numpy
 import pytest
 
-from closed_loop.control import navigator as navigator_module, wavefront
+from closed_loop.control import move_check, wavefront
 from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, outline
 from closed_loop.control.guard import scan_points
 from closed_loop.control.local_planner import PREDICTION_STEP_S, NavigatorError, _pursue, plan, predict, required_margin
@@ -192,7 +192,8 @@ def test_a_decision_at_720_rays_in_clutter_is_cheap():
 
 # --- the states, on injected time ----------------------------------------------------------------------------
 
-from closed_loop.control.navigator import BLIND_EXTRA_M, CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
+from closed_loop.control.move_check import BLIND_EXTRA_M  # noqa: E402
+from closed_loop.control.navigator import CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
 
 
 def test_reaching_the_goal_gives_zero_for_good():
@@ -460,7 +461,7 @@ def test_the_chamfer_transform_never_overstates_by_more_than_its_allowance():
 def test_danger_is_a_path_within_the_margin_of_any_scan_point():
     # in_danger looks only at points near the swept footprint; it must agree with the whole scan's clearance.
     from closed_loop.control.guard import path_clearance
-    from closed_loop.control.navigator import in_danger
+    from closed_loop.control.move_check import in_danger
     s = NavigatorSettings()
     rng = numpy.random.default_rng(11)
     seen = set()
@@ -512,7 +513,7 @@ def test_a_recovery_turn_keeps_more_than_the_margin_from_what_it_remembers_where
     # 270-degree LIDAR: a turn in place would sweep a back corner 0.08 m from one of them, which keeps the
     # margin (0.05 m) but not the margin and BLIND_EXTRA_M, nor the margin and the drift odometry may have
     # made since the posts were seen half a minute before (remembered points are as wrong as odometry).
-    monkeypatch.setattr(navigator_module, 'BLIND_EXTRA_M', extra)
+    monkeypatch.setattr(move_check, 'BLIND_EXTRA_M', extra)
     corner = math.hypot(JACKAL.x_max, JACKAL.y_max)
     posts = [((corner + 0.1) * math.cos(a), (corner + 0.1) * math.sin(a), 0.02) for a in (2.62, -2.62)]
     wall = ((0.45, -3.0), (0.45, 3.0))

@@ -35,7 +35,8 @@ import numpy
 from closed_loop.control import wavefront
 from closed_loop.control.clearance_field import (FIELD_ERROR_M, OUTLINE_STEP_M, DistanceField, clearances, edge_clearance,
                                          keeps_margin, outline32)
-from closed_loop.control.guard import footprint_clearance, path_clearance, scan_points
+from closed_loop.control.guard import footprint_clearance, path_clearance, point_clearances, scan_points
+from closed_loop.control.scan_memory import BLIND_EXTRA_M, blind_points
 
 #: Step between predicted poses (s): between two poses an obstacle point cannot slip through more than the
 #: margin allows.
@@ -58,6 +59,10 @@ SCAN_WAY_ROOM_M = 0.03
 EXACT_CHECKS = 4
 #: An aim more than this far (rad) to a side decides which way to turn in place.
 AIM_SIDE_RAD = 0.2
+#: Already within the margin, a turn in place must open the clearance by this much (m) by the time it is at
+#: rest, not only keep it: judged on what the scan sees of an obstacle, a turn that keeps its clearance can
+#: bring a side the scan does not see closer (a Jackal's rear corner crept into a post at 0.03 rad/s).
+WITHIN_MARGIN_OPEN_M = 0.003
 #: With a corridor (no goal), this near (m) to where its line is closed off, the robot stops: blocked.
 BLOCKED_STOP_M = 0.3
 #: Following the way where the window would stand: turn in place toward the aim while it lies more than
@@ -105,10 +110,11 @@ def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
 
 
 def prepare():
-    """The planner's compiled parts (``arc_kernel``, the way's ``wave_kernel``) loaded, and compiled on a
-    machine's first use (about two seconds), before a decision asks for them: a controller calls it as it is
-    made, so its first decision is not the one that waits."""
+    """The planner's compiled parts (``arc_kernel``, the way's ``wave_kernel``, the navigator's escape's
+    ``hybrid_kernel``) loaded, and compiled on a machine's first use (a few seconds), before a decision asks
+    for them: a controller calls it as it is made, so its first decision is not the one that waits."""
     wavefront.prepare()
+    importlib.import_module('closed_loop.control.escape').prepare()
     kernel = importlib.import_module('closed_loop.control.arc_kernel')
     poses = kernel.predict(0.0, 0.0, numpy.zeros(1), numpy.zeros(1), 1.0, 1.0, 0.1, 1, 0.1)
     one, none = numpy.ones((1, 1), numpy.float32), numpy.zeros(1, numpy.float32)
@@ -164,21 +170,6 @@ def check_finite(name, *values):
     for value in values:
         if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
             raise NavigatorError('%s: expected finite numbers, got %r' % (name, values))
-
-
-def blind_points(points, scan, laser_pose):
-    """Those of ``points`` ((N, 2), the robot's frame) outside the scan's sweep, as seen from the laser."""
-    return points[blind_mask(points, scan, laser_pose)]
-
-
-def blind_mask(points, scan, laser_pose):
-    """(N,) bool: which of ``points`` ((N, 2), the robot's frame) lie outside the scan's sweep."""
-    if scan.angle_max - scan.angle_min + scan.angle_increment >= 2 * math.pi - 1e-6 or not len(points):
-        return numpy.zeros(len(points), bool)
-    bearing = numpy.arctan2(points[:, 1] - laser_pose.y, points[:, 0] - laser_pose.x) - laser_pose.yaw
-    middle, half = 0.5 * (scan.angle_min + scan.angle_max), 0.5 * (scan.angle_max - scan.angle_min)
-    off = numpy.abs(numpy.arctan2(numpy.sin(bearing - middle), numpy.cos(bearing - middle)))
-    return off > half + scan.angle_increment
 
 
 def step_toward(target, previous, measured, rate, period_s, limit):
@@ -240,8 +231,8 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     # Where the scanner cannot see (behind a LIDAR of less than a full turn), what was seen there before
     # is the best knowledge there is: remembered points in that blind sector count for safety too, so a
     # turn does not swing the robot's back into something it saw a moment ago.
-    points = numpy.concatenate((scanned, blind_points(remembered, scan, laser_pose))) \
-        if remembered is not None and len(remembered) else scanned
+    blind = blind_points(remembered, scan, laser_pose) if remembered is not None and len(remembered) else scanned[:0]
+    points = numpy.concatenate((scanned, blind)) if len(blind) else scanned
     top_v, top_w = max(s.max_speed, abs(v0)), max(s.max_yaw_rate, abs(w0))
     # Followed for the horizon, then both speeds brake at once: at rest after the longer of the two.
     safe_steps = int(math.ceil((s.horizon + max(top_v / s.accel, top_w / s.yaw_accel)) / PREDICTION_STEP_S)) + 1
@@ -269,12 +260,20 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     if now < s.safety_margin:
         now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
     if now < s.safety_margin:
-        # Already within the margin: only a turn in place that brings no point closer, judged exactly (the
-        # grid is too coarse to see a centimetre), and only while the robot is nearly at rest.
+        # Already within the margin: only a turn in place that brings no point closer and opens the clearance
+        # (WITHIN_MARGIN_OPEN_M), judged exactly (the grid is too coarse to see a centimetre), and only while
+        # the robot is nearly at rest.
         maybe[:] = False
         for i in numpy.nonzero((v == 0.0) & ~safe)[0]:
-            if abs(v0) < 0.05 and path_clearance(near, footprint, safe_poses[i]) >= now:
+            if abs(v0) < 0.05 and path_clearance(near, footprint, safe_poses[i]) >= now and \
+                    footprint_clearance(near, footprint, *safe_poses[i][-1]) >= now + WITHIN_MARGIN_OPEN_M:
                 safe[i] = True
+    # A turn in place keeps BLIND_EXTRA_M more from what it remembers where the scan cannot see (a back corner
+    # swinging round through it).
+    blind = blind[numpy.hypot(blind[:, 0], blind[:, 1]) <= radius + float(margin.max()) + BLIND_EXTRA_M]
+    for i in numpy.nonzero((v == 0.0) & (w != 0.0) & (safe | maybe))[0] if len(blind) else ():
+        if float(point_clearances(blind, footprint, safe_poses[i]).min()) < margin[i] + BLIND_EXTRA_M:
+            safe[i] = maybe[i] = False
     arcs = predict(v0, w0, v, w, s, s.lookahead, long_steps, PREFERENCE_STEP_S)
     along = clearances(field, coarse, arcs, PREFERENCE_OUTLINE_STEP_M)
     candidates = numpy.column_stack((v, w, clear, safe))

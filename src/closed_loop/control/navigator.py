@@ -3,6 +3,7 @@
 GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (close the place just ahead to the way
 for a while, back up where the scan sees the rear clear, back out while it has no room to turn (along the way it
 came, else straight or on an arc), then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
+after ESCAPE_AFTER_S without progress, AVOIDING along an escape's plan for the footprint (``closed_loop.control.escape``);
 REACHED within ``goal_tolerance`` of the goal; FAILED after ``give_up_timeout`` without progress. With no
 goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
 numbers. Free of ROS.
@@ -13,11 +14,12 @@ import math
 
 import numpy
 
-from closed_loop.control.guard import (footprint_clearance, footprint_clearances, path_clearance, point_clearances,
-                                       scan_points)
-from closed_loop.control.local_planner import (PREDICTION_STEP_S, blind_mask, blind_points, check_finite, plan,
-                                               predict, required_margin, step_toward)
-from closed_loop.control.scan_memory import ScanMemory, from_frame, to_frame
+from closed_loop.control import escape
+from closed_loop.control.guard import footprint_clearances, path_clearance, scan_points
+from closed_loop.control.local_planner import (PREDICTION_STEP_S, check_finite, plan, predict,
+                                               required_margin, step_toward)
+from closed_loop.control.move_check import MoveCheck
+from closed_loop.control.scan_memory import ScanMemory, blind_points, from_frame, to_frame
 from closed_loop.control.trail import TRAIL_LOOKBACK_M, TRAIL_STEP_M, Trail, back_toward, rear_seen
 from closed_loop.control.loop import LoopSettings
 from closed_loop.settings import SettingsError, param
@@ -77,24 +79,6 @@ class GoalSettings:
                                  'start heading; 0: no goal, hold the start heading forever', minimum=0.0)
 
 
-def in_danger(sent, scan_points_xy, settings, footprint):
-    """True if the command being followed (``sent``, m/s and rad/s) is no longer safe: its predicted path
-    comes within ``safety_margin`` of the scan's points (robot frame). The node acts at once on such a
-    scan rather than at its next tick."""
-    v, w = sent
-    if v == 0.0 and w == 0.0 or not len(scan_points_xy):
-        return False
-    s = settings
-    steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
-    poses = predict(v, w, [v], [w], s, s.horizon, steps)[0]
-    # Only a point within the margin of the swept footprint counts: none farther from the robot than the
-    # farthest pose, the footprint's corner and the margin.
-    margin = required_margin(s, v)
-    reach = float(numpy.hypot(poses[:, 0], poses[:, 1]).max()) + footprint.radius_m + margin
-    near = scan_points_xy[numpy.hypot(scan_points_xy[:, 0], scan_points_xy[:, 1]) <= reach]
-    return bool(len(near)) and float(footprint_clearances(near, footprint, poses).min()) < margin
-
-
 class NavState(enum.Enum):
     """What the navigator is doing (its ``~mode``)."""
     GOAL_SEEKING = 'GOAL_SEEKING'
@@ -131,12 +115,6 @@ RECOVERY_TURN_S = 2.0
 #: After this long (s) without progress, where the window would stand or turn in place, the way is followed
 #: instead, heading first (local_planner.plan's ``follow``).
 FOLLOW_AFTER_S = 1.0
-#: A recovery's move keeps BLIND_EXTRA_M, and BLIND_DRIFT_MPS for each second since it was seen, beyond the
-#: margin from a point remembered where the scan cannot see: a skid-steer base turning in place slides a few
-#: centimetres its odometry does not see, and among posts its odometry drifted about 5 mm a second (0.37 m in
-#: 80 s of a Jackal's BARN run, turning in pockets).
-BLIND_EXTRA_M = 0.05
-BLIND_DRIFT_MPS = 0.005
 #: Where it was stuck is closed to the way for CLOSED_FOR_S: a disc of CLOSED_RADIUS_M (drawn as points
 #: CLOSED_STEP_M apart round its centre, which the way keeps its half-width and margin from) CLOSED_AHEAD_M
 #: ahead of the robot, so the next way found leads elsewhere. Closed places are for the way only, never for
@@ -201,6 +179,7 @@ class Navigator:
         self._trail = Trail()        # the way it came (odom), to back out along
         self._way = None             # the way followed, (N, 2) in odom, kept while it stays open (wavefront.way)
         self._command = None         # the first step is taken from the measured speed
+        self._escape = escape.Escape()
         if self.state is not NavState.GOAL_SEEKING and now_s is not None:
             self._enter(NavState.GOAL_SEEKING, now_s, 'new goal')
 
@@ -274,7 +253,7 @@ class Navigator:
             step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
-        elif now_s - self._stuck_from_s >= s.stuck_timeout:
+        elif now_s - self._stuck_from_s >= s.stuck_timeout and not self._escape.active:
             self._recovery = {'started_s': now_s, 'side': self._side, 'turn_s': None, 'from': pose[:2],
                               'end': self._trail.back(BACKOUT_M) if len(self._trail) > 1 else None}
             self._way = None
@@ -289,6 +268,9 @@ class Navigator:
         if scan is not self._remembered_scan:
             self._remembered_scan, self._scanned = scan, self.scanned(scan, laser_pose)
             self._memory.add(now_s, pose, self._scanned, scan, laser_pose, footprint)
+        step = self._escaping(now_s, pose, v0, w0, scan, laser_pose, footprint, stalled, goal_local)
+        if step is not None:
+            return step
         if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
             step = self._final_approach(now_s, pose, goal_local, v0, w0, scan, laser_pose, footprint)
             if step is not None:
@@ -342,26 +324,33 @@ class Navigator:
         self._enter(NavState.GOAL_SEEKING, now_s, why)
         return Step(NavState.GOAL_SEEKING, v, w, why)
 
+    def _escaping(self, now_s, pose, v0, w0, scan, laser_pose, footprint, stalled, goal_local):
+        """The escape's command (``closed_loop.control.escape``), as one period's step, or None."""
+        s = self.settings
+        if not self._escape.due(now_s, stalled):
+            return None
+        route = None if self._way is None else to_frame(self._way, pose)
+        check = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self._scanned, self._memory.points(pose),
+                          self._memory.t, now_s)
+        cmd = self._escape.command(
+            now_s, pose, lambda: numpy.concatenate((from_frame(self._scanned, pose), self._memory.xy)),
+            tuple(from_frame(numpy.array([escape.aim(route, goal_local)]), pose)[0]), footprint,
+            s.safety_margin + escape.PLAN_ROOM_M, check, s.horizon)
+        if cmd is None:
+            return None
+        prev_v, prev_w = (None, None) if self._command is None else self._command
+        v = step_toward(cmd[0], prev_v, v0, s.accel, 1.0 / s.rate_hz, s.max_speed)
+        w = step_toward(cmd[1], prev_w, w0, s.yaw_accel, 1.0 / s.rate_hz, s.max_yaw_rate)
+        self._stuck_from_s = now_s
+        self._enter(NavState.AVOIDING, now_s, cmd[2])
+        return Step(NavState.AVOIDING, v, w, cmd[2])
+
     def _recover(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         """The recovery's command now, or None when it is over (then seek again, with a fresh timer)."""
         s = self.settings
         elapsed = now_s - self._recovery['started_s']
-        points = self.scanned(scan, laser_pose)
-        remembered = self._memory.points(pose)
-        blind = blind_mask(remembered, scan, laser_pose)
-        # Where the scan cannot see, what is remembered is only as right as odometry since it was seen.
-        blind, doubt = remembered[blind], BLIND_EXTRA_M + BLIND_DRIFT_MPS * (now_s - self._memory.t[blind])
-        now_clear = footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
-
-        def safe(v, w, seconds):
-            # Within the margin of what the scan shows, a move that brings nothing closer; from each point
-            # remembered where it cannot see, the margin and that point's doubt, always.
-            poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, seconds,
-                            int(math.ceil((seconds + 1.0) / PREDICTION_STEP_S)))[0]
-            margin = required_margin(s, v)
-            clearance = path_clearance(points, footprint, poses)
-            return ((clearance >= margin or clearance >= now_clear - 1e-3)
-                    and bool((point_clearances(blind, footprint, poses) - doubt >= margin).all()))
+        safe = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self.scanned(scan, laser_pose),
+                         self._memory.points(pose), self._memory.t, now_s).safe
         r = self._recovery
         turn = r['side'] * RECOVERY_TURN_RADPS
         if r['turn_s'] is None:

@@ -14,6 +14,12 @@ import numpy
 CELL_M = 0.1
 #: A remembered point this much (m) short of the newest range along its ray is seen through: gone.
 SEE_THROUGH_M = 0.15
+#: A move turning in place (the window's, the recovery's, the escape's) keeps this much more than the margin
+#: from a point remembered where the scan cannot see: what was seen of an obstacle is the side that faced the
+#: laser, and a back corner swinging round meets a side never seen (a BARN post's lay 5 cm nearer a Jackal's
+#: corner than any point remembered of it); and a skid-steer base turning in place slides a few centimetres
+#: its odometry does not see.
+BLIND_EXTRA_M = 0.05
 
 
 def to_frame(points, pose):
@@ -29,6 +35,21 @@ def from_frame(points, pose):
     x, y, yaw = pose
     c, s = math.cos(yaw), math.sin(yaw)
     return numpy.column_stack((x + c * points[:, 0] - s * points[:, 1], y + s * points[:, 0] + c * points[:, 1]))
+
+
+def blind_points(points, scan, laser_pose):
+    """Those of ``points`` ((N, 2), the robot's frame) outside the scan's sweep, as seen from the laser."""
+    return points[blind_mask(points, scan, laser_pose)]
+
+
+def blind_mask(points, scan, laser_pose):
+    """(N,) bool: which of ``points`` ((N, 2), the robot's frame) lie outside the scan's sweep."""
+    if scan.angle_max - scan.angle_min + scan.angle_increment >= 2 * math.pi - 1e-6 or not len(points):
+        return numpy.zeros(len(points), bool)
+    bearing = numpy.arctan2(points[:, 1] - laser_pose.y, points[:, 0] - laser_pose.x) - laser_pose.yaw
+    middle, half = 0.5 * (scan.angle_min + scan.angle_max), 0.5 * (scan.angle_max - scan.angle_min)
+    off = numpy.abs(numpy.arctan2(numpy.sin(bearing - middle), numpy.cos(bearing - middle)))
+    return off > half + scan.angle_increment
 
 
 class ScanMemory:

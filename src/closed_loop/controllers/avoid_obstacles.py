@@ -22,7 +22,8 @@ from closed_loop.control.guard import scan_points
 from closed_loop.control.local_planner import NavigatorError, prepare
 from closed_loop.control.loop import stale_input
 from closed_loop.control.markers import arrow_end
-from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState, in_danger
+from closed_loop.control.move_check import in_danger
+from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState
 from closed_loop.control.scan_memory import CELL_M
 from closed_loop.control.scan import ScanError, validate_scan
 from closed_loop.controllers import STOP, Controller, ControllerError

@@ -1,0 +1,151 @@
+"""The navigator's escape from a pocket: its footprint plan (hybrid A*, heading first), the follower, and the
+rule that keeps a turn in place within the margin from creeping."""
+import math
+
+import numpy
+import pytest
+
+from closed_loop.control import escape, hybrid_kernel
+from closed_loop.control.guard import footprint_clearance
+from closed_loop.control.local_planner import plan
+from closed_loop.control.navigator import NavigatorSettings
+from closed_loop.geometry import Pose2D
+from closed_loop.robot_model import Footprint
+from closed_loop.control.scan import Scan
+
+JACKAL = Footprint(-0.254, 0.254, -0.2155, 0.2155)
+MARGIN = 0.055
+
+
+def wall_with_gap(x, half_gap, step=0.01, half_length=2.5):
+    """Points along x = ``x`` from -half_length to half_length but for |y| < half_gap."""
+    ys = numpy.arange(-half_length, half_length, step)
+    ys = ys[numpy.abs(ys) >= half_gap]
+    return numpy.column_stack((numpy.full(len(ys), x), ys))
+
+
+def check_moves(poses):
+    """Each pose follows from the one before by the move it names."""
+    for (x, y, yaw, _), (nx, ny, nyaw, m) in zip(poses, poses[1:]):
+        direction, turn = hybrid_kernel.MOVES[int(m)]
+        ex, ey, eyaw = hybrid_kernel.pose_along(x, y, yaw, direction, turn, 1.0)
+        assert (nx, ny) == pytest.approx((ex, ey), abs=1e-9)
+        assert math.cos(nyaw - eyaw) == pytest.approx(1.0, abs=1e-9)
+
+
+@pytest.mark.parametrize('heading', [math.pi / 2, -math.pi / 2, math.pi])
+def test_the_plan_passes_a_gap_narrower_than_the_turning_circle_heading_first(heading):
+    # Facing along the wall (or away from it), 0.7 m from a gap 0.13 m wider than the Jackal: it cannot turn
+    # through the gap, it must line up first.
+    half_gap = JACKAL.y_max + MARGIN + 0.04
+    points = wall_with_gap(0.7, half_gap)
+    assert 2 * half_gap < 2 * JACKAL.radius_m
+    poses = escape.find_way(points, (0.0, 0.0, heading), (1.6, 0.0), JACKAL, MARGIN)
+    assert poses is not None
+    check_moves(poses)
+    assert math.hypot(poses[-1, 0] - 1.6, poses[-1, 1]) <= escape.GOAL_RADIUS_M
+    # Every pose keeps the margin, but for the reading of the outline between its samples (a few mm).
+    least = min(footprint_clearance(points - p[:2], JACKAL, 0.0, 0.0, p[2]) for p in poses)
+    assert least >= MARGIN - 0.004
+    # It goes through the gap lined up with it (forward or back).
+    through = [p for p in poses if abs(p[0] - 0.7) < 0.05]
+    assert through and all(abs(math.cos(p[2])) > 0.95 for p in through)
+
+
+def test_no_plan_where_the_gap_is_narrower_than_the_footprint_and_margin():
+    half_gap = JACKAL.y_max + MARGIN - 0.02
+    assert escape.find_way(wall_with_gap(0.7, half_gap), (0.0, 0.0, 0.0), (1.6, 0.0), JACKAL, MARGIN) is None
+
+
+def test_no_plan_out_of_a_closed_ring():
+    around = numpy.linspace(0, 2 * math.pi, 400, endpoint=False)
+    ring = 0.8 * numpy.column_stack((numpy.cos(around), numpy.sin(around)))
+    assert escape.find_way(ring, (0.0, 0.0, 0.0), (2.0, 0.0), JACKAL, MARGIN) is None
+
+
+def test_a_start_already_within_the_margin_may_leave_but_not_come_closer():
+    # A wall 0.03 m behind the Jackal's back (within the margin): the plan leaves it, never nearer.
+    points = numpy.column_stack((numpy.full(300, JACKAL.x_min - 0.03), numpy.linspace(-1.5, 1.5, 300)))
+    poses = escape.find_way(points, (0.0, 0.0, 0.0), (1.0, 0.5), JACKAL, MARGIN)
+    assert poses is not None
+    clear = [footprint_clearance(points - p[:2], JACKAL, 0.0, 0.0, p[2]) for p in poses]
+    assert min(clear) >= 0.03 - escape.PLAN_ROOM_M - 0.004
+
+
+def test_the_aim_is_along_the_way_followed():
+    route = numpy.array([(-0.5, 0.0), (0.0, 0.0), (1.0, 0.0), (1.0, 3.0)])
+    assert escape.aim(route, (5.0, 5.0)) == pytest.approx((1.0, 1.0))
+    assert escape.aim(None, (3.0, 4.0)) == pytest.approx((1.2, 1.6))
+    assert escape.aim(route, (1.0, 1.0)) == (1.0, 1.0)       # the goal is nearer than ESCAPE_AIM_M
+
+
+def test_the_follower_brings_a_unicycle_to_the_plan_s_end():
+    # The plan through the gap followed from its start by a unicycle that does what it is told, 10 Hz.
+    half_gap = JACKAL.y_max + MARGIN + 0.04
+    points = wall_with_gap(0.7, half_gap)
+    poses = escape.find_way(points, (0.0, 0.0, math.pi / 2), (1.6, 0.0), JACKAL, MARGIN)
+    follower = escape.Follower(poses)
+    x, y, yaw = 0.0, 0.0, math.pi / 2
+    least = math.inf
+    for _ in range(600):
+        cmd = follower.command((x, y, yaw))
+        if cmd is None:
+            break
+        v, w, why = cmd
+        assert why.startswith('escape:') and abs(v) <= escape.SPEED_MPS and abs(w) <= 0.6
+        for _ in range(10):
+            x, y, yaw = x + 0.01 * v * math.cos(yaw), y + 0.01 * v * math.sin(yaw), yaw + 0.01 * w
+        least = min(least, footprint_clearance(points - (x, y), JACKAL, 0.0, 0.0, yaw))
+    assert cmd is None
+    assert math.hypot(x - poses[-1, 0], y - poses[-1, 1]) < 0.1
+    assert least > 0.03
+
+
+def test_a_turn_in_place_within_the_margin_must_open_the_clearance():
+    # A post just off the Jackal's back left corner, 0.03 m from it (within the 0.05 m margin): a slow turn
+    # (the window's slowest, 0.03 rad/s) keeps the clearance but hardly opens it, and is not taken as safe;
+    # a fast turn away opens it.
+    s = NavigatorSettings(max_speed=1.0, max_yaw_rate=1.5, accel=2.0, yaw_accel=6.0)
+    corner = numpy.array([JACKAL.x_min, JACKAL.y_max])
+    post = corner + 0.03 * corner / numpy.linalg.norm(corner)
+    rays = 720
+    angles = -math.pi + numpy.arange(rays) * 2 * math.pi / rays
+    ranges = numpy.full(rays, numpy.inf)
+    ranges[int(round((math.atan2(post[1], post[0]) + math.pi) / (2 * math.pi / rays))) % rays] = \
+        numpy.linalg.norm(post)
+    scan = Scan(0.0, 'laser', -math.pi, angles[-1], 2 * math.pi / rays, 0.0, 0.1, 0.05, 8.0, ranges)
+    p = plan(scan, Pose2D(0.0, 0.0, 0.0), JACKAL, 0.0, 0.0, (5.0, 0.0), s)
+    v, w, safe = p.candidates[:, 0], p.candidates[:, 1], p.candidates[:, 3].astype(bool)
+    slowest = (v == 0.0) & (numpy.abs(w) > 0) & numpy.isclose(numpy.abs(w), numpy.abs(w[w != 0]).min())
+    assert slowest.sum() == 2 and not safe[slowest].any()
+    assert safe[(v == 0.0) & (w == w.min())].all()
+
+
+class Reasons:
+    """An episode's onlooker (``closed_loop.batch.lockstep.Tap``'s calls) that keeps the navigator's reasons."""
+
+    def begin(self, rig, controller, judge):
+        self.controller, self.reasons = controller, []
+
+    def decided(self, t_s):
+        if self.controller.step is not None:
+            self.reasons.append(self.controller.step.reason)
+
+    def scan(self, t_s, ranges):
+        pass
+
+    frame = command = stepped = scan
+
+
+def test_a_jackal_escapes_a_barn_pocket_where_the_window_alone_times_out(monkeypatch):
+    # A BARN-method world (fill 0.35, seed 31) where the navigator without its escape times out in a pocket.
+    from closed_loop.batch.episode import EpisodeSpec, run_episode
+    spec = EpisodeSpec(world={'generator': {'method': 'barn', 'seed': 31, 'fill': 0.35, 'smoothing': 2}},
+                       robot='jackal', controller='avoid_obstacles', time_limit_s=80.0)
+    tap = Reasons()
+    result = run_episode(spec, tap=tap)
+    assert (result.outcome, result.contacts) == ('reached', 0), result.why
+    assert any(reason.startswith('escape:') for reason in tap.reasons)
+    monkeypatch.setattr(escape, 'ESCAPE_AFTER_S', math.inf)
+    alone = run_episode(spec, tap=Reasons())
+    assert alone.outcome != 'reached' and alone.contacts == 0, alone.why
