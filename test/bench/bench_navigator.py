@@ -95,7 +95,7 @@ class Recorder:
     def replay(self, times=REPLAYS):
         """Each run's decisions again, in order, in a fresh Navigator with nothing else in the loop (as the
         node has its own process), ``times`` over: (times, D), the wall time (ms) of each update that planned
-        in each replay (the same decisions each time)."""
+        (the window's, or the escape's) in each replay (the same decisions each time)."""
         navigator_module.Navigator.__init__ = self._init
         navigator_module.Navigator.update = self._update
         replays = []
@@ -106,7 +106,7 @@ class Recorder:
                 for args in inputs:
                     t0 = time.perf_counter()
                     step = nav.update(*args)
-                    if step.plan is not None:
+                    if step.plan is not None or step.route is not None:
                         replays[-1].append((time.perf_counter() - t0) * 1e3)
         return numpy.array(replays)
 

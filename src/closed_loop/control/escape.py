@@ -28,13 +28,15 @@ START_RADIUS_M = 0.15
 #: Search limits: no move ends farther (m) than this from the start, and at most this many states are searched.
 REACH_M = 2.5
 MAX_EXPANDED = 20000
-#: The distance field's cell (m), the search's position bins (m), the footprint outline's sample spacing (m).
+#: The distance field's cell (m), the search's position bins (m), the footprint outline's sample spacing (m);
+#: the doubts on what is remembered where the scan cannot see are rounded up to DOUBT_STEP_M.
 GRID_M = 0.02
+DOUBT_STEP_M = 0.02
 BIN_M = 0.05
 OUTLINE_M = 0.03
 #: Following: forward or back at this speed (m/s), turning in place at TURN_GAIN x the heading error between
 #: these rates (rad/s); a move's heading held with HEADING_GAIN and its line with CROSS_GAIN (rad/s per m).
-SPEED_MPS = 0.1
+SPEED_MPS = 0.2
 TURN_GAIN = 1.5
 TURN_RADPS = (0.25, 0.5)
 HEADING_GAIN = 1.5
@@ -44,8 +46,10 @@ CROSS_GAIN = 3.0
 REALIGN_RAD = 0.5
 TURN_DONE_RAD = 0.06
 NEAR_ENOUGH_RAD = 0.2
-#: A plan whose next command is not safe for this long (s) is dropped.
+#: A plan whose next move is not safe for this long (s) is dropped; one the robot has strayed from (its next
+#: pose farther than a move and this, m) is dropped, and another asked for at once.
 BLOCKED_S = 1.0
+OFF_PLAN_M = 0.1
 
 
 def _kernel():
@@ -71,12 +75,9 @@ def aim(route, goal_local):
     return goal_local[0] * ESCAPE_AIM_M / distance, goal_local[1] * ESCAPE_AIM_M / distance
 
 
-def find_way(points, start, target, footprint, margin_m):
-    """Poses (N, 4) from ``start`` (x, y, yaw) to within GOAL_RADIUS_M of ``target`` (x, y), each with the index
-    in ``hybrid_kernel.MOVES`` of the move that reached it, keeping ``margin_m`` of ``points`` (M, 2), all in
-    one frame; None if there is none within the search's limits."""
-    kernel = _kernel()
-    n = int(math.ceil((REACH_M + footprint.radius_m + margin_m) / GRID_M)) + 1
+def _distances(points, start, n):
+    """(2n + 1, 2n + 1): each GRID_M cell's distance (m) to the nearest of ``points`` (M, 2), read on the safe
+    side (a point anywhere in its cell), cell (n, n) centred at ``start``."""
     size = 2 * n + 1
     free = numpy.full((size, size), 255, numpy.uint8)
     if len(points):
@@ -84,8 +85,23 @@ def find_way(points, start, target, footprint, margin_m):
         i = numpy.floor((points[:, 1] - start[1]) / GRID_M + 0.5).astype(numpy.intp) + n
         inside = (i >= 0) & (i < size) & (j >= 0) & (j < size)
         free[i[inside], j[inside]] = 0
-    # A point is anywhere in its cell: read from the cell's corner. (Each command is checked exactly anyway.)
-    field = cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * GRID_M - GRID_M * math.sqrt(0.5)
+    return cv2.distanceTransform(free, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * GRID_M - GRID_M * math.sqrt(0.5)
+
+
+def find_way(points, start, target, footprint, margin_m, doubtful=None, doubt=None):
+    """Poses (N, 4) from ``start`` (x, y, yaw) to within GOAL_RADIUS_M of ``target`` (x, y), each with the index
+    in ``hybrid_kernel.MOVES`` of the move that reached it, keeping ``margin_m`` of ``points`` (M, 2), and
+    ``doubt`` (K,) m more of ``doubtful`` (K, 2) (what is remembered where the scan cannot see: the check of
+    each command keeps it, ``move_check``), all in one frame; None if there is none within the search's
+    limits."""
+    kernel = _kernel()
+    n = int(math.ceil((REACH_M + footprint.radius_m + margin_m) / GRID_M)) + 1
+    field = _distances(points, start, n)
+    if doubtful is not None and len(doubtful):
+        # The doubts rounded up to DOUBT_STEP_M: one distance transform for each.
+        levels = numpy.ceil(numpy.asarray(doubt) / DOUBT_STEP_M) * DOUBT_STEP_M
+        for level in numpy.unique(levels):
+            field = numpy.minimum(field, _distances(doubtful[levels == level], start, n) - level)
     shape = outline(footprint, OUTLINE_M)
     origin = start[0] - n * GRID_M, start[1] - n * GRID_M
     xs, ys = numpy.ascontiguousarray(shape[:, 0], float), numpy.ascontiguousarray(shape[:, 1], float)
@@ -113,6 +129,7 @@ class Follower:
     def __init__(self, poses):
         self.poses = poses[1:]
         self.index = 0
+        self.strayed = False
 
     def turning(self):
         """The heading (rad, odom) the turn in place being followed ends at; None if the next move is not one."""
@@ -124,10 +141,14 @@ class Follower:
         return _kernel().MOVES[int(self.poses[self.index][3])]
 
     def command(self, pose):
-        """(m/s, rad/s, why) toward the plan's next pose from ``pose`` (odom); None once the plan is done."""
+        """(m/s, rad/s, why) toward the plan's next pose from ``pose`` (odom); None once the plan is done, or
+        the robot has strayed from it (``strayed``)."""
         x, y, yaw = pose
         while self.index < len(self.poses):
             tx, ty, tyaw = self.poses[self.index][:3]
+            if math.hypot(tx - x, ty - y) > _kernel().MOVE_M + OFF_PLAN_M:
+                self.strayed = True
+                return None
             direction, turn = self._move()
             if direction == 0:
                 error = _wrap(tyaw - yaw)
@@ -162,23 +183,29 @@ class Escape:
     def active(self):
         return self.follower is not None
 
+    def route(self):
+        """The plan's way ahead, (N, 2) odom; None while none is followed."""
+        return None if self.follower is None else self.follower.poses[self.follower.index:, :2]
+
     def due(self, now_s, stalled_s):
         """True while a plan is followed, or once one is to be asked for."""
         return self.active or (stalled_s >= ESCAPE_AFTER_S and (self.next_try_s is None or now_s >= self.next_try_s))
 
     def command(self, now_s, pose, points, target, footprint, margin_m, check, horizon_s):
         """(m/s, rad/s, why) for now, or None (the window decides), once :meth:`due`. ``points()``: (M, 2) what
-        is seen and remembered (odom); ``target``: (x, y) odom; ``check``: a ``move_check.MoveCheck`` for now."""
+        is seen and remembered, and (K, 2) what is remembered where the scan cannot see and (K,) its doubt (m)
+        (odom); ``target``: (x, y) odom; ``check``: a ``move_check.MoveCheck`` for now."""
         if self.follower is None:
             self.next_try_s = now_s + RETRY_S
-            poses = find_way(points(), pose, target, footprint, margin_m)
+            seen, doubtful, doubt = points()
+            poses = find_way(seen, pose, target, footprint, margin_m, doubtful, doubt)
             if poses is None:
                 return None
             self.follower, self.blocked_s = Follower(poses), None
         while True:
             cmd = self.follower.command(pose)
             if cmd is None:
-                self.follower, self.next_try_s = None, now_s + RETRY_S
+                self.follower, self.next_try_s = None, now_s if self.follower.strayed else now_s + RETRY_S
                 return None
             v, w, why = cmd
             for f in (1.0, 0.5, 0.25):

@@ -39,13 +39,15 @@ class Opinion:
 @dataclasses.dataclass(frozen=True)
 class FusionStep:
     """One decision: the state (``FusionState.WAITING``, or the navigator's ``NavState``), the command,
-    why, the navigator's plan if it made one, and the opinions of every track."""
+    why, the navigator's plan if it made one, the opinions of every track, and the navigator's escape's way
+    ahead while it follows one."""
     state: enum.Enum
     linear_x: float
     angular_z: float
     reason: str
     plan: object = None
     opinions: tuple = ()
+    route: object = None
 
 
 class FusionNavigator:
@@ -125,4 +127,5 @@ class FusionNavigator:
             self.waiting = False
             self.navigator.set_goal(self.navigator.goal, now_s)        # a wait is not being stuck
         step = self.navigator.update(now_s, pose, v0, w0, scan, laser_pose, footprint)
-        return FusionStep(step.state, step.linear_x, step.angular_z, step.reason, step.plan, self.opinions)
+        return FusionStep(step.state, step.linear_x, step.angular_z, step.reason, step.plan, self.opinions,
+                          step.route)

@@ -127,13 +127,15 @@ CLOSED_FOR_S = 60.0
 
 @dataclasses.dataclass(frozen=True)
 class Step:
-    """One decision of :class:`Navigator`: the state, the command (m/s, rad/s), why, and the plan if one
-    was made (None while recovering, reached or failed)."""
+    """One decision of :class:`Navigator`: the state, the command (m/s, rad/s), why, the plan if one
+    was made (None while recovering, escaping, reached or failed), and the escape's way ahead ((N, 2) odom)
+    while it follows one."""
     state: NavState
     linear_x: float
     angular_z: float
     reason: str
     plan: object = None
+    route: object = None
 
 
 class Navigator:
@@ -333,7 +335,8 @@ class Navigator:
         check = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self._scanned, self._memory.points(pose),
                           self._memory.t, now_s)
         cmd = self._escape.command(
-            now_s, pose, lambda: numpy.concatenate((from_frame(self._scanned, pose), self._memory.xy)),
+            now_s, pose, lambda: (numpy.concatenate((from_frame(self._scanned, pose), self._memory.xy)),
+                                  from_frame(check.blind, pose), check.doubt),
             tuple(from_frame(numpy.array([escape.aim(route, goal_local)]), pose)[0]), footprint,
             s.safety_margin + escape.PLAN_ROOM_M, check, s.horizon)
         if cmd is None:
@@ -343,7 +346,7 @@ class Navigator:
         w = step_toward(cmd[1], prev_w, w0, s.yaw_accel, 1.0 / s.rate_hz, s.max_yaw_rate)
         self._stuck_from_s = now_s
         self._enter(NavState.AVOIDING, now_s, cmd[2])
-        return Step(NavState.AVOIDING, v, w, cmd[2])
+        return Step(NavState.AVOIDING, v, w, cmd[2], route=self._escape.route())
 
     def _recover(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
         """The recovery's command now, or None when it is over (then seek again, with a fresh timer)."""

@@ -138,7 +138,7 @@ class AvoidObstacles(Controller):
                                          self.context.laser_pose, self.context.footprint)
         except (NavigatorError, ScanError) as error:
             return self._stop(str(error))
-        if step.plan is not None:
+        if step.plan is not None or step.route is not None:
             if self.record_timings:
                 self.decision_ms.append((time.perf_counter() - started) * 1e3)
             self._news.update(('window', 'plan'))
@@ -171,7 +171,9 @@ class AvoidObstacles(Controller):
         plan = None if self.step is None else self.step.plan
         if 'window' in news and 'window' in wanted and plan is not None:
             out['window'] = self.window_drawing(plan)
-        if 'plan' in news and 'plan' in wanted and plan is not None:
+        if 'plan' in news and 'plan' in wanted and self.step.route is not None:
+            out['plan'] = Route(tuple((float(x), float(y)) for x, y in self.step.route))
+        elif 'plan' in news and 'plan' in wanted and plan is not None:
             out['plan'] = self.route(plan, self.pose)
         if 'map' in news and 'map' in wanted and self.navigator is not None:
             out['map'] = self.map_drawing(self.navigator.remembered())
