@@ -228,7 +228,12 @@ def main():
             print('demo: no footprint for the clearance figure: %s' % error)
         except OSError:
             pass    # the master went with the launch, which the loop below reports
-        mon = Monitor(args.controller, world, outline_xy)
+        try:
+            mon = Monitor(args.controller, world, outline_xy)
+        except rospy.ROSException:      # its subscriptions closed: the launch ended meanwhile
+            if launch.poll() is None:
+                raise
+            return report_early_end(launch, log_path)
         started = time.monotonic()
         next_status = started
         while time.monotonic() - started < args.seconds:

@@ -67,3 +67,38 @@ def test_a_port_that_accepts_and_never_answers_is_no_master(tmp_path):
     done = subprocess.run([sys.executable, '-c', code, ROOT, str(port)], env=ros_env(tmp_path, port),
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
     assert b'joined False' in done.stdout, done.stdout
+
+
+# A master that answers the tools' check (getSystemState, then getPid) once, then closes its port and
+# ends 2 s later: the tool's node retries its registration meanwhile.
+FAKE_MASTER = textwrap.dedent('''
+    import os, sys, time
+    from xmlrpc.server import SimpleXMLRPCServer
+    server = SimpleXMLRPCServer(('127.0.0.1', int(sys.argv[1])), logRequests=False)
+    server.register_function(lambda caller: [1, '', []], 'getSystemState')
+    server.register_function(lambda caller: [1, '', os.getpid()], 'getPid')
+    server.handle_request()
+    server.handle_request()
+    server.server_close()
+    time.sleep(2.0)
+''')
+
+
+def test_a_launch_that_ends_while_the_tool_joins_is_reported(tmp_path):
+    """The master answers the check, then is gone before the tool's node registers (a required node that
+    failed at once, under load): rospy's own start-up would retry its registration forever."""
+    port = free_port()
+    code = textwrap.dedent('''
+        import subprocess, sys, time
+        sys.path.insert(0, sys.argv[1] + '/src')
+        from closed_loop.nodes.common import join_launch
+        launch = subprocess.Popen([sys.executable, '-c', sys.argv[3], sys.argv[2]])
+        started = time.monotonic()
+        joined = join_launch('joiner', launch, 30.0)
+        print('joined %s; launch ended: %s; after %.0f s'
+              % (joined, launch.poll() is not None, time.monotonic() - started))
+    ''')
+    done = subprocess.run([sys.executable, '-c', code, ROOT, str(port), FAKE_MASTER], env=ros_env(tmp_path, port),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
+    out = done.stdout.decode(errors='replace')
+    assert 'joined False; launch ended: True' in out, out

@@ -1,6 +1,7 @@
 """Helpers shared by the node classes: start-up, settings from ``~`` parameters, stamps."""
 import math
 import os
+import signal
 import sys
 import tempfile
 import threading
@@ -13,6 +14,9 @@ from geometry_msgs.msg import Twist
 
 from closed_loop import netenv, reconfigure, robot_model
 from closed_loop.settings import SettingsError, from_params
+
+#: The signal by which :func:`join_launch`'s watcher asks the main thread to shut the node down.
+LAUNCH_ENDED_SIGNAL = signal.SIGUSR1
 
 #: How often a repeated warning or error of a node may reappear in the log (s).
 LOG_PERIOD_S = 2.0
@@ -68,11 +72,13 @@ class Publisher(rospy.Publisher):
 def join_launch(name, launch, wait_s):
     """Join, as an anonymous node without signal handlers, the graph that ``launch`` (the subprocess.Popen
     of a roslaunch) brings up. True once joined; False if no master came within ``wait_s`` s or the launch
-    ended first.
+    ended first. Call it from the main thread.
 
-    rospy retries a registration with the master for as long as the node is up, so a subscription made
-    just as the launch ends would hang its caller forever; a watcher thread shuts this node down when the
-    launch ends, which ends those retries.
+    rospy retries a registration with the master for as long as the node is up: its own start-up
+    (``init_node`` registers ``/rosout``) and any subscription made as the launch ends would hang their
+    caller forever. So a watcher thread shuts this node down when the launch ends. It hands the shut-down
+    to the main thread (:data:`LAUNCH_ENDED_SIGNAL`), as rospy's own Ctrl-C handler does: rospy retries a
+    registration holding its topics' lock, and a shut-down from another thread waits for that lock forever.
     """
     import rosgraph
     uri = rosgraph.get_master_uri()
@@ -81,13 +87,22 @@ def join_launch(name, launch, wait_s):
         if launch.poll() is not None or time.monotonic() > deadline:
             return False
         time.sleep(0.2)
-    init_node(name, anonymous=True, disable_signals=True)
+    main = threading.main_thread()
+    signal.signal(LAUNCH_ENDED_SIGNAL, lambda signum, frame: rospy.signal_shutdown('the launch ended'))
 
     def watch():
         launch.wait()
-        rospy.signal_shutdown('the launch ended')
+        if not rospy.core.is_shutdown_requested():
+            signal.pthread_kill(main.ident, LAUNCH_ENDED_SIGNAL)
     threading.Thread(target=watch, name='launch-watch', daemon=True).start()
-    return True
+    try:
+        init_node(name, anonymous=True, disable_signals=True)
+    except (rospy.ROSException, OSError):
+        if launch.poll() is None:
+            raise
+    # A launch that ended while the node started (a required node that failed at once) is reported by the
+    # caller, as one that ended before the master came.
+    return launch.poll() is None
 
 
 def load_settings(cls, namespaces=('~',)):
