@@ -164,9 +164,10 @@ class Reasons:
 
 
 def test_a_jackal_escapes_a_barn_pocket_where_the_window_alone_times_out(monkeypatch):
-    # A BARN-method world (fill 0.35, seed 3) where the navigator without its escape times out in a pocket.
+    # A BARN-method world (fill 0.35, seed 23) where the navigator without its escape times out in a pocket
+    # (chosen among the benchmark's: changes to the navigator move which worlds need the escape).
     from closed_loop.batch.episode import EpisodeSpec, run_episode
-    spec = EpisodeSpec(world={'generator': {'method': 'barn', 'seed': 3, 'fill': 0.35, 'smoothing': 2}},
+    spec = EpisodeSpec(world={'generator': {'method': 'barn', 'seed': 23, 'fill': 0.35, 'smoothing': 2}},
                        robot='jackal', controller='avoid_obstacles', time_limit_s=80.0)
     tap = Reasons()
     result = run_episode(spec, tap=tap)

@@ -293,7 +293,7 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     if corridor is not None and way is not None and way.goal != tuple(goal_xy):
         # The line is closed off within the corridor: go up to where, steering for the far point (which keeps
         # the heading; a near one would turn a small offset from the line into a large angle), and stop.
-        if math.hypot(*way.goal) <= BLOCKED_STOP_M:
+        if math.hypot(*way.goal) <= BLOCKED_STOP_M + 1e-9:     # the line's points are sums of half cells
             why = ('the way along the start heading is closed off %.2f m ahead (no way round within '
                    'hold_corridor): stopped before it' % math.hypot(*way.goal))
             return Plan(0.0, 0.0, 'stop', why, now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)

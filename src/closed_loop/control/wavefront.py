@@ -35,13 +35,14 @@ import math
 import cv2
 import numpy
 
-CELL_M = 0.2
+CELL_M = 0.1
 FINE = 2
 BOX_MARGIN_M = 3.0
 MAX_BOX_M = 20.0
 START_SEARCH_M = 0.8
-#: A wave that has not reached the robot in this many rounds finds no way.
-WAVE_ROUNDS = 254
+#: A wave that has not reached the robot within this length of way (m, rounds of CELL_M) finds no way.
+WAVE_REACH_M = 50.0
+WAVE_ROUNDS = int(round(WAVE_REACH_M / CELL_M))
 #: A way kept from the last decision stays the way while it is at most KEEP_LONGER x the shortest + KEEP_EXTRA_M.
 KEEP_LONGER = 1.1
 KEEP_EXTRA_M = 0.5
