@@ -79,8 +79,8 @@ def run_launch_checks(args):
 
 
 #: Jobs that measure rates or wall time, or change a node while it runs, or whose verdict turns on how soon a node
-#: answers in wall time (episode_agreement: at 1 m/s on a real-time graph, a stop 35 ms late rests 3.5 cm
-#: farther, beyond its 3 cm), run one at a time at the normal CPU priority; every other job (a system test file,
+#: answers in wall time (episode_agreement, at half real time: at 1 m/s, a stop 70 ms late in wall time rests
+#: 3.5 cm farther, beyond its 3 cm), run one at a time at the normal CPU priority; every other job (a system test file,
 #: a rostest judged on simulated time and ground truth) runs SIDE_BY_SIDE at a time beside them, at niceness
 #: BESIDE_NICENESS, each rostest with the master rostest starts on a free port and its own ROS_HOME and logs,
 #: each system test on its own free ports.
