@@ -21,10 +21,15 @@ NOT_CLOSER_M = 1e-3
 
 
 class MoveCheck:
-    """Is a move (v, w) from the speeds now safe? Within the margin of what the scan shows, a move that brings
-    nothing closer; from each point remembered where it cannot see, the margin and that point's doubt, always.
-    ``scanned``: the scan's points (the robot's frame); ``remembered``: the memory's (the robot's frame) and
-    ``seen_s`` when each was seen."""
+    """Is a move (v, w) from the speeds now safe? It keeps the margin from what the scan shows, and the margin
+    and each point's doubt from what is remembered where the scan cannot see; where the robot already stands
+    closer than that to either, a move that brings nothing closer (of the scan's points; of the remembered ones,
+    counting the doubt). ``scanned``: the scan's points (the robot's frame); ``remembered``: the memory's (the
+    robot's frame) and ``seen_s`` when each was seen.
+
+    The rule is the same for both: a doubt grows while the robot stays in a pocket, and would otherwise come to
+    forbid every move, even one straight away from the point (docs/benchmarks.md, "Moves that bring nothing
+    closer")."""
 
     def __init__(self, settings, footprint, v0, w0, scan, laser_pose, scanned, remembered, seen_s, now_s):
         self.settings, self.footprint, self.v0, self.w0 = settings, footprint, v0, w0
@@ -34,6 +39,14 @@ class MoveCheck:
         self.blind = remembered[blind]
         self.doubt = BLIND_EXTRA_M + BLIND_DRIFT_MPS * (now_s - seen_s[blind])
         self.now_clear = footprint_clearance(scanned, footprint, 0.0, 0.0, 0.0)
+        self.now_blind = self._blind_clearance(numpy.zeros((1, 3)))
+
+    def _blind_clearance(self, poses):
+        """The least clearance (m) over ``poses`` from what is remembered where the scan cannot see, less each
+        point's doubt; +inf where nothing is."""
+        if not len(self.blind):
+            return math.inf
+        return float((point_clearances(self.blind, self.footprint, poses) - self.doubt).min())
 
     def safe(self, v, w, seconds, speed=None):
         """True if (v, w) followed for ``seconds`` and then braked keeps the margin for ``speed`` (default
@@ -43,8 +56,10 @@ class MoveCheck:
                         int(math.ceil((seconds + 1.0) / PREDICTION_STEP_S)))[0]
         margin = required_margin(s, v if speed is None else speed)
         clearance = path_clearance(self.scanned, self.footprint, poses)
-        return ((clearance >= margin or clearance >= self.now_clear - NOT_CLOSER_M)
-                and bool((point_clearances(self.blind, self.footprint, poses) - self.doubt >= margin).all()))
+        if not (clearance >= margin or clearance >= self.now_clear - NOT_CLOSER_M):
+            return False
+        blind = self._blind_clearance(poses)
+        return blind >= margin or blind >= self.now_blind - NOT_CLOSER_M
 
 
 def in_danger(sent, scan_points_xy, settings, footprint):
