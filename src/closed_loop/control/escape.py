@@ -30,7 +30,7 @@ REACH_M = 2.5
 MAX_EXPANDED = 20000
 #: The distance field's cell (m), the search's position bins (m), the footprint outline's sample spacing (m);
 #: the doubts on what is remembered where the scan cannot see are rounded up to DOUBT_STEP_M.
-GRID_M = 0.02
+GRID_M = 0.01
 DOUBT_STEP_M = 0.02
 BIN_M = 0.05
 OUTLINE_M = 0.03
