@@ -144,23 +144,9 @@ def live_robot_model():
     return robot_model.load_robot_model(rospy.get_param('/robot_description'), settings.names)
 
 
-def launch_failure_lines(log_path, most=8):
-    """The lines of the launch log that say why it ended: FATAL and ERROR lines, and roslaunch's word that a
-    required process died (roslaunch itself then exits 0, as ROS 1 does)."""
-    try:
-        with open(log_path, errors='replace') as log:
-            lines = [line.rstrip() for line in log if 'FATAL' in line or '[ERROR]' in line
-                     or 'REQUIRED process' in line or 'has died' in line]
-    except OSError:
-        return []
-    return lines[-most:]
-
-
 def report_early_end(launch, log_path):
     """Say that the launch ended before the run did, and why; the demo's exit status (1)."""
-    print('\ndemo: the launch ended early (roslaunch exit code %s); see %s' % (launch.returncode, log_path))
-    for line in launch_failure_lines(log_path):
-        print('  ' + line)
+    print('\n' + launcher.early_end_report('demo', launch, log_path))
     return 1
 
 

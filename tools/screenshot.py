@@ -3,6 +3,7 @@
 the robot has driven, and save a screenshot of rviz to rviz/screenshot.png (shown in the README and the tutorial).
 
 Usage (inside ``source env.sh``): python3 tools/screenshot.py [--world red_box] [--out rviz/screenshot.png]
+[--port 11397] (its master's port)
 """
 import argparse
 import math
@@ -29,8 +30,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--world', default='red_box')
     parser.add_argument('--out', default=os.path.join(ROOT, 'rviz', 'screenshot.png'))
+    parser.add_argument('--port', type=int, default=MASTER_PORT, help="its own master's port")
     args = parser.parse_args()
-    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % MASTER_PORT)
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % args.port)
     os.environ.update(env)
     problem = launcher.master_problem(env['ROS_MASTER_URI'])
     if problem is not None:
@@ -40,7 +42,7 @@ def main():
     os.makedirs(os.path.dirname(log_path), exist_ok=True)
     with VirtualScreen() as screen, open(log_path, 'w') as log:
         env['DISPLAY'] = screen.display
-        launch = launcher.Launch(['-p', str(MASTER_PORT), 'closed_loop', 'demo.launch', 'world:=' + args.world,
+        launch = launcher.Launch(['-p', str(args.port), 'closed_loop', 'demo.launch', 'world:=' + args.world,
                                   'rviz:=true'], log, env)
         try:
             import rospy
@@ -48,10 +50,18 @@ def main():
             from closed_loop.nodes.common import join_launch
             deadline = time.monotonic() + WAIT_LIMIT_S
             if not join_launch('screenshot', launch, WAIT_LIMIT_S):
-                print('screenshot: no master; see %s' % log_path)
+                print(launcher.early_end_report('screenshot', launch, log_path) if launch.poll() is not None
+                      else 'screenshot: no master within %.0f s; see %s' % (WAIT_LIMIT_S, log_path))
                 return 1
             while True:
-                msg = rospy.wait_for_message('/base_pose_ground_truth', Odometry, timeout=WAIT_LIMIT_S)
+                try:
+                    msg = rospy.wait_for_message('/base_pose_ground_truth', Odometry, timeout=WAIT_LIMIT_S)
+                except rospy.ROSException:      # rospy.ROSInterruptException too
+                    # The launch ended (join_launch shut the node down), or no ground truth came in time.
+                    print(launcher.early_end_report('screenshot', launch, log_path) if launch.poll() is not None
+                          else 'screenshot: no /base_pose_ground_truth within %.0f s; see %s' % (WAIT_LIMIT_S,
+                                                                                                 log_path))
+                    return 1
                 p = msg.pose.pose.position
                 if math.hypot(p.x, p.y) > MOVED_M or time.monotonic() > deadline:
                     break

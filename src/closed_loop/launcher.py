@@ -10,6 +10,7 @@ master (a roscore stopped with Ctrl-Z accepts connections and never answers; ros
 waits forever, and roslaunch with it). Free of ROS.
 """
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -116,3 +117,26 @@ class Launch:
 
     def __exit__(self, *_):
         self.end()
+
+
+#: roslaunch colours its own lines (ANSI escapes), which a report quotes without.
+ANSI_COLOUR = re.compile(r'\x1b\[[0-9;]*m')
+
+
+def failure_lines(log_path, most=8):
+    """The lines of a launch's log that say why it ended: FATAL and ERROR lines, and roslaunch's word that a
+    required process died (roslaunch itself then exits 0, as ROS 1 does); the last ``most`` of them."""
+    try:
+        with open(log_path, errors='replace') as log:
+            lines = [ANSI_COLOUR.sub('', line).rstrip() for line in log if 'FATAL' in line or '[ERROR]' in line
+                     or 'REQUIRED process' in line or 'has died' in line]
+    except OSError:
+        return []
+    return lines[-most:]
+
+
+def early_end_report(tool, launch, log_path):
+    """What ``tool`` says when ``launch`` ended before its run did: the exit code, the log, and the log's
+    lines that say why."""
+    first = '%s: the launch ended early (roslaunch exit code %s); see %s' % (tool, launch.returncode, log_path)
+    return '\n'.join([first] + ['  ' + line for line in failure_lines(log_path)])

@@ -1,5 +1,6 @@
 """A tool that watches a launch (``make demo``, the screenshot) ends when the launch ends, even if the master
 goes while it subscribes: rospy alone retries that registration forever."""
+import os
 import subprocess
 import sys
 import textwrap
@@ -102,3 +103,17 @@ def test_a_launch_that_ends_while_the_tool_joins_is_reported(tmp_path):
                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=60)
     out = done.stdout.decode(errors='replace')
     assert 'joined False; launch ended: True' in out, out
+
+
+def test_the_screenshot_says_why_when_the_launch_ends_early(tmp_path):
+    # demo.launch with a world that does not exist: the simulator (required) exits, and roslaunch with it,
+    # while the screenshot tool waits for the robot to drive. It says so in a sentence, not a traceback.
+    port = free_port()
+    out_png = tmp_path / 'shot.png'
+    done = subprocess.run([sys.executable, os.path.join(ROOT, 'tools', 'screenshot.py'), '--world', 'no_such_world',
+                           '--out', str(out_png), '--port', str(port)], env=ros_env(tmp_path, port),
+                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=150)
+    out = done.stdout.decode(errors='replace')
+    assert done.returncode == 1, out
+    assert 'screenshot: the launch ended early' in out and 'Traceback' not in out, out
+    assert not out_png.exists()

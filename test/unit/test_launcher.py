@@ -63,3 +63,12 @@ def test_a_graph_run_again_in_its_folder_is_not_the_dead_runs_keepers_to_kill(tm
     finally:
         node.kill()
         node.wait()
+
+
+def test_a_launch_log_s_failure_lines_are_quoted_without_roslaunch_s_colours(tmp_path):
+    log = tmp_path / 'launch.log'
+    log.write_text('[INFO] started\n[FATAL] [1.0, 0.0] [/sim]: cannot load the world\n'
+                   '\x1b[31m=====REQUIRED process [sim-2] has died!\x1b[0m\n')
+    assert launcher.failure_lines(str(log)) == ['[FATAL] [1.0, 0.0] [/sim]: cannot load the world',
+                                                '=====REQUIRED process [sim-2] has died!']
+    assert launcher.failure_lines(str(tmp_path / 'missing.log')) == []
