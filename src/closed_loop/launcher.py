@@ -38,13 +38,25 @@ def marked_processes(prefix):
     return found
 
 
-def kill_marked(prefix):
-    """SIGKILL every process marked with ``prefix`` (see :func:`marked_processes`)."""
-    for pid in marked_processes(prefix):
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except OSError:
-            pass
+#: How long kill_marked waits for the processes it killed to be gone (s): a killed process is listed until it
+#: has exited, which on a loaded machine can be a moment after the signal.
+KILL_WAIT_S = 5.0
+
+
+def kill_marked(prefix, wait_s=KILL_WAIT_S):
+    """SIGKILL every process marked with ``prefix`` (see :func:`marked_processes`), again while any is listed,
+    until none is or ``wait_s`` has passed; returns the pids still listed (none, unless one cannot be killed)."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        left = marked_processes(prefix)
+        if not left or time.monotonic() > deadline:
+            return left
+        for pid in left:
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:
+                pass
+        time.sleep(0.05)
 
 
 #: How long roslaunch gets after SIGINT to end its nodes and its master (s).
