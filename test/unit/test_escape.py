@@ -178,3 +178,31 @@ def test_a_jackal_escapes_a_barn_pocket_where_the_window_alone_times_out(monkeyp
     monkeypatch.setattr(escape, 'ESCAPE_AFTER_S', math.inf)
     alone = run_episode(spec, tap=Reasons())
     assert alone.outcome != 'reached' and alone.contacts == 0, alone.why
+
+
+@pytest.mark.parametrize('wall_m, slowed', [(0.12, False), (0.07, True)])
+def test_a_move_whose_arc_back_onto_the_plan_is_not_safe_is_sent_with_its_turn_slowed(wall_m, slowed):
+    # The Jackal 0.06 m right of a plan straight along x: the follower steers left, back onto it (0.2 m/s, 0.18
+    # rad/s), toward a wall ``wall_m`` from its left side. Far enough, that command is sent. Nearer, it keeps the
+    # margin at no slower speed with that turn (the arc swings the front corner out), and the escape waited
+    # until it dropped the plan; now the turn is slowed too.
+    from closed_loop.control.move_check import MoveCheck
+    wall = numpy.column_stack((numpy.arange(-1.0, 2.0, 0.01), numpy.full(300, JACKAL.y_max + wall_m)))
+    front = Scan(0.0, 'laser', -3 * math.pi / 4, 3 * math.pi / 4, math.pi / 360, 0.0, 0.1, 0.1, 8.0,
+                 numpy.full(541, numpy.inf))
+    check = MoveCheck(NavigatorSettings(), JACKAL, 0.0, 0.0, front, Pose2D(0.0, 0.0, 0.0), wall, numpy.zeros((0, 2)),
+                      numpy.zeros(0), 0.0)
+    straight = int(numpy.nonzero((hybrid_kernel.MOVES[:, 0] == 1) & (hybrid_kernel.MOVES[:, 1] == 0))[0][0])
+    plan = numpy.array([(x, 0.06, 0.0, straight if x else -1) for x in numpy.arange(0.0, 1.05, 0.1)])
+    run = escape.Escape()
+    run.follower = escape.Follower(plan)
+    v, w, why = run.command(0.0, (0.0, 0.0, 0.0), None, (1.0, 0.06), JACKAL, 0.055, check, 0.5)
+    full_v, full_w, _ = escape.Follower(plan).command((0.0, 0.0, 0.0))
+    assert full_v == pytest.approx(escape.SPEED_MPS) and full_w > 0.1 and 'along the plan' in why
+    speed_only = [check.safe(full_v * f, full_w, 0.5, full_v * f) for f in (1.0, 0.5, 0.25)]
+    if not slowed:
+        assert (v, w) == pytest.approx((full_v, full_w)) and speed_only[0]
+    else:
+        assert not any(speed_only)
+        assert 0.0 < v < full_v and 0.0 <= w < full_w
+        assert check.safe(v, w, 0.5, v)

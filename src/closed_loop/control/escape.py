@@ -2,8 +2,8 @@
 progress, a plan for the robot's footprint, heading first, over what it sees and remembers, to a point
 ESCAPE_AIM_M along the way it was following (``closed_loop.control.hybrid_kernel``'s search: short moves
 straight or on arcs, forward or back, and turns in place), followed one slow command at a time. Each command
-is checked exactly (``closed_loop.control.move_check``) before it is sent, at its speed, half and a quarter of
-it; a plan whose next move is not safe for BLOCKED_S is dropped, and the next is asked for RETRY_S later.
+is checked exactly (``closed_loop.control.move_check``) before it is sent, and slower where it is not safe
+(FALL_BACKS); a plan whose next move is not safe for BLOCKED_S is dropped, and the next is asked for RETRY_S later.
 Free of ROS.
 """
 import importlib
@@ -49,6 +49,11 @@ NEAR_ENOUGH_RAD = 0.2
 #: A plan whose next move is not safe for this long (s) is dropped; one the robot has strayed from (its next
 #: pose farther than a move and this, m) is dropped, and another asked for at once.
 BLOCKED_S = 1.0
+#: A move's command that is not safe is tried slower: (speed, turn rate) as fractions of it, in this order. A
+#: turn slowed with the speed keeps the arc; slowed more, or none, keeps to the move's line rather than steer
+#: back onto the plan (the check predicts the command's arc, which can swing a corner out where the plan's
+#: poses keep the margin).
+FALL_BACKS = ((1.0, 1.0), (0.5, 1.0), (0.25, 1.0), (0.5, 0.5), (0.25, 0.25), (0.25, 0.0))
 OFF_PLAN_M = 0.1
 
 
@@ -208,10 +213,10 @@ class Escape:
                 self.follower, self.next_try_s = None, now_s if self.follower.strayed else now_s + RETRY_S
                 return None
             v, w, why = cmd
-            for f in (1.0, 0.5, 0.25):
-                if check.safe(v * f, w, horizon_s, max(abs(v * f), abs(check.v0))):
+            for f, g in FALL_BACKS:
+                if check.safe(v * f, w * g, horizon_s, max(abs(v * f), abs(check.v0))):
                     self.blocked_s = None
-                    return v * f, w, why
+                    return v * f, w * g, why
                 if v == 0.0:
                     break
             heading = self.follower.turning()
