@@ -96,8 +96,11 @@ def test_the_aim_is_along_the_way_followed():
     assert escape.aim(route, (1.0, 1.0)) == (1.0, 1.0)       # the goal is nearer than ESCAPE_AIM_M
 
 
-def test_the_follower_brings_a_unicycle_to_the_plan_s_end():
-    # The plan through the gap followed from its start by a unicycle that does what it is told, 10 Hz.
+@pytest.mark.parametrize('limits', [(escape.SPEED_MPS, escape.MAX_TURN_RADPS), (0.25, 0.4)])
+def test_the_follower_brings_a_unicycle_to_the_plan_s_end(limits):
+    # The plan through the gap followed from its start by a unicycle that does what it is told, 10 Hz, within
+    # the follower's own limits and a slower robot's. The plan's arcs ask more turn than either allows at the
+    # follower's speed: a turn rate cut to the limit at that speed drives a wider arc (into the wall here).
     half_gap = JACKAL.y_max + MARGIN + 0.04
     points = wall_with_gap(0.7, half_gap)
     poses = escape.find_way(points, (0.0, 0.0, math.pi / 2), (1.6, 0.0), JACKAL, MARGIN)
@@ -105,11 +108,11 @@ def test_the_follower_brings_a_unicycle_to_the_plan_s_end():
     x, y, yaw = 0.0, 0.0, math.pi / 2
     least = math.inf
     for _ in range(600):
-        cmd = follower.command((x, y, yaw))
+        cmd = follower.command((x, y, yaw), limits)
         if cmd is None:
             break
         v, w, why = cmd
-        assert why.startswith('escape:') and abs(v) <= escape.SPEED_MPS and abs(w) <= 0.6
+        assert why.startswith('escape:') and abs(v) <= limits[0] and abs(w) <= limits[1]
         for _ in range(10):
             x, y, yaw = x + 0.01 * v * math.cos(yaw), y + 0.01 * v * math.sin(yaw), yaw + 0.01 * w
         least = min(least, footprint_clearance(points - (x, y), JACKAL, 0.0, 0.0, yaw))

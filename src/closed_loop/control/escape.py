@@ -1,9 +1,10 @@
 """The navigator's escape from a pocket (``closed_loop.control.navigator``): after ESCAPE_AFTER_S without
 progress, a plan for the robot's footprint, heading first, over what it sees and remembers, to a point
 ESCAPE_AIM_M along the way it was following (``closed_loop.control.hybrid_kernel``'s search: short moves
-straight or on arcs, forward or back, and turns in place), followed one slow command at a time. Each command
-is checked exactly (``closed_loop.control.move_check``) before it is sent, and slower where it is not safe
-(FALL_BACKS); a plan whose next move is not safe for BLOCKED_S is dropped, and the next is asked for RETRY_S later.
+straight or on arcs, forward or back, and turns in place), followed one command at a time at SPEED_MPS (slower
+on an arc that asks a faster turn than MAX_TURN_RADPS). Each command is checked exactly
+(``closed_loop.control.move_check``) before it is sent, and slower where it is not safe (FALL_BACKS); a plan whose
+next move is not safe for BLOCKED_S is dropped, and the next is asked for RETRY_S later.
 Free of ROS.
 """
 import importlib
@@ -35,8 +36,11 @@ DOUBT_STEP_M = 0.02
 BIN_M = 0.05
 OUTLINE_M = 0.03
 #: Following: forward or back at this speed (m/s), turning in place at TURN_GAIN x the heading error between
-#: these rates (rad/s); a move's heading held with HEADING_GAIN and its line with CROSS_GAIN (rad/s per m).
-SPEED_MPS = 0.2
+#: these rates (rad/s); a move's heading held with HEADING_GAIN and its line with CROSS_GAIN (rad/s per m). A
+#: move that asks a turn faster than MAX_TURN_RADPS (or the robot's limit, if lower) is driven slower on the
+#: same arc: the plan's arcs (hybrid_kernel, 1.96 rad a metre) ask 0.79 rad/s at SPEED_MPS.
+SPEED_MPS = 0.4
+MAX_TURN_RADPS = 1.0
 TURN_GAIN = 1.5
 TURN_RADPS = (0.25, 0.5)
 HEADING_GAIN = 1.5
@@ -145,9 +149,10 @@ class Follower:
     def _move(self):
         return _kernel().MOVES[int(self.poses[self.index][3])]
 
-    def command(self, pose):
-        """(m/s, rad/s, why) toward the plan's next pose from ``pose`` (odom); None once the plan is done, or
-        the robot has strayed from it (``strayed``)."""
+    def command(self, pose, limits=(SPEED_MPS, MAX_TURN_RADPS)):
+        """(m/s, rad/s, why) toward the plan's next pose from ``pose`` (odom), within ``limits`` (the robot's top
+        speed, m/s, and turn rate, rad/s); None once the plan is done, or the robot has strayed from it
+        (``strayed``)."""
         x, y, yaw = pose
         while self.index < len(self.poses):
             tx, ty, tyaw = self.poses[self.index][:3]
@@ -169,10 +174,13 @@ class Follower:
             cross, error = -(tx - x) * s + (ty - y) * c, _wrap(tyaw - yaw)
             if abs(error) > REALIGN_RAD:
                 return 0.0, math.copysign(0.4, error), 'escape: turning back onto the plan'
-            v = direction * SPEED_MPS
+            v = direction * min(SPEED_MPS, limits[0])
             curvature = turn * 2.0 * math.pi / _kernel().HEADINGS / _kernel().MOVE_M
             w = curvature * v + HEADING_GAIN * error + direction * CROSS_GAIN * cross
-            return v, max(-0.6, min(0.6, w)), 'escape: %s along the plan' % ('forward' if direction > 0 else 'back')
+            top = min(MAX_TURN_RADPS, limits[1])
+            if abs(w) > top:     # slower, on the same arc: where the robot goes is what counts
+                v, w = v * top / abs(w), math.copysign(top, w)
+            return v, w, 'escape: %s along the plan' % ('forward' if direction > 0 else 'back')
         return None
 
 
@@ -196,10 +204,12 @@ class Escape:
         """True while a plan is followed, or once one is to be asked for."""
         return self.active or (stalled_s >= ESCAPE_AFTER_S and (self.next_try_s is None or now_s >= self.next_try_s))
 
-    def command(self, now_s, pose, points, target, footprint, margin_m, check, horizon_s):
+    def command(self, now_s, pose, points, target, footprint, margin_m, check, horizon_s,
+                limits=(SPEED_MPS, MAX_TURN_RADPS)):
         """(m/s, rad/s, why) for now, or None (the window decides), once :meth:`due`. ``points()``: (M, 2) what
         is seen and remembered, and (K, 2) what is remembered where the scan cannot see and (K,) its doubt (m)
-        (odom); ``target``: (x, y) odom; ``check``: a ``move_check.MoveCheck`` for now."""
+        (odom); ``target``: (x, y) odom; ``check``: a ``move_check.MoveCheck`` for now; ``limits``: the robot's
+        top speed (m/s) and turn rate (rad/s)."""
         if self.follower is None:
             self.next_try_s = now_s + RETRY_S
             seen, doubtful, doubt = points()
@@ -208,7 +218,7 @@ class Escape:
                 return None
             self.follower, self.blocked_s = Follower(poses), None
         while True:
-            cmd = self.follower.command(pose)
+            cmd = self.follower.command(pose, limits)
             if cmd is None:
                 self.follower, self.next_try_s = None, now_s if self.follower.strayed else now_s + RETRY_S
                 return None

@@ -338,7 +338,7 @@ class Navigator:
             now_s, pose, lambda: (numpy.concatenate((from_frame(self._scanned, pose), self._memory.xy)),
                                   from_frame(check.blind, pose), check.doubt),
             tuple(from_frame(numpy.array([escape.aim(route, goal_local)]), pose)[0]), footprint,
-            s.safety_margin + escape.PLAN_ROOM_M, check, s.horizon)
+            s.safety_margin + escape.PLAN_ROOM_M, check, s.horizon, (s.max_speed, s.max_yaw_rate))
         if cmd is None:
             return None
         prev_v, prev_w = (None, None) if self._command is None else self._command
