@@ -5,7 +5,8 @@ Usage (inside ``source env.sh``; ``make test`` does that):
     python3 tools/run_tests.py [--unit-only] [--rostest-only] [-k NAME]
 
 Unit tests (test/unit) need no master. System tests (test/system) start real ROS processes outside
-rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces -- and need root.
+rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces and mounts (where
+this machine allows no namespace or mount, the tests that need one skip: test/machine.py).
 Rostest files each get the master rostest starts on a free port. First roslaunch-check on every launch file;
 then two things at once: the rostest files that measure rates or wall time or change a node while it runs
 (ALONE) one at a time, at the normal CPU priority, and beside them the unit tests, every system test file and
@@ -13,8 +14,9 @@ every other rostest file, SIDE_BY_SIDE at a time, at the lowest CPU priority (ni
 they take only the CPU the ALONE file leaves (the system test files that sweep graph episodes first, and never
 two of them at once). Each has its own output in test_output/ (printed when it fails).
 
-Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed``
-(pytest and rostest counted together); the exit status is non-zero if anything failed or nothing ran.
+Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed, K skipped``
+(pytest and rostest counted together), after a line for each test skipped (only where this machine cannot give what
+it needs: test/machine.py) and each failed; the exit status is non-zero if anything failed or nothing ran.
 """
 import argparse
 import functools
@@ -37,9 +39,9 @@ ROSTEST_HANG_LIMIT_S = 300
 
 
 def count_junit(path):
-    """(passed, failed, skipped, failed test names) from one JUnit XML file."""
-    passed = failed = skipped = 0
-    names = []
+    """(passed, failed, skipped, failed test names) from one JUnit XML file; skipped is a list of 'name: why'."""
+    passed = failed = 0
+    names, skipped = [], []
     root = ET.parse(path).getroot()
     for case in root.iter('testcase'):
         name = '%s.%s' % (case.get('classname', ''), case.get('name', ''))
@@ -47,10 +49,15 @@ def count_junit(path):
             failed += 1
             names.append(name)
         elif case.find('skipped') is not None:
-            skipped += 1
+            why = case.find('skipped').get('message') or case.find('skipped').text or ''
+            skipped.append('%s: %s' % (name, why.strip().splitlines()[0] if why.strip() else 'no reason given'))
         else:
             passed += 1
     return passed, failed, skipped, names
+
+
+def skip_note(skipped):
+    return ', %d skipped' % len(skipped) if skipped else ''
 
 
 def run_launch_checks(args):
@@ -69,13 +76,13 @@ def run_launch_checks(args):
         xml = os.path.join(results_dir, name + '.xml')
         out = subprocess.run([script, '-o', xml, '-t', path], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                              cwd=ROOT)
-        p, f, _, _ = count_junit(xml) if os.path.exists(xml) else (0, 0, 0, [])
+        p, f, _, _ = count_junit(xml) if os.path.exists(xml) else (0, 0, [], [])
         if out.returncode != 0 or f or not p:
             failed += 1
             names.append('roslaunch-check %s: %s' % (name, out.stdout.decode(errors='replace').strip()))
         else:
             passed += 1
-    return passed, failed, 0, names
+    return passed, failed, [], names
 
 
 #: Jobs that measure rates or wall time, or change a node while it runs, or whose verdict turns on how soon a node
@@ -116,8 +123,8 @@ def run_rostest_file(path, results_dir, niceness=0):
                                    timeout=ROSTEST_HANG_LIMIT_S, preexec_fn=lower_priority(niceness))
         except subprocess.TimeoutExpired:
             code = 'timeout'
-    p = f = s = 0
-    names = []
+    p = f = 0
+    s, names = [], []
     # rosunit-<test-name>.xml: one testcase per test method (hztest, our unittest nodes).
     for xml in sorted(glob.glob(os.path.join(file_results, '**', 'rosunit-*.xml'), recursive=True)):
         dp, df, ds, dn = count_junit(xml)
@@ -133,7 +140,7 @@ def run_rostest_file(path, results_dir, niceness=0):
         f, names = f + 1, names + ['%s (rostest exit %s, see %s)' % (name, code, log)]
     if p + f == 0:
         f, names = 1, ['%s (no test ran, see %s)' % (name, log)]
-    text = '== rostest %s ... %d passed, %d failed (%.0f s)' % (name, p, f, time.monotonic() - started)
+    text = '== rostest %s ... %d passed, %d failed%s (%.0f s)' % (name, p, f, skip_note(s), time.monotonic() - started)
     if f:
         with open(log) as out:
             text += '\n   --- tail of %s ---\n%s' % (log, out.read()[-3000:])
@@ -151,10 +158,10 @@ def run_pytest(path, results_dir, select=None, niceness=0):
         code = subprocess.call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider',
                                 '--junitxml', xml] + (['-k', select] if select else []),
                                stdout=out, stderr=subprocess.STDOUT, cwd=ROOT, preexec_fn=lower_priority(niceness))
-    p, f, s, names = count_junit(xml) if os.path.exists(xml) else (0, 0, 0, [])
+    p, f, s, names = count_junit(xml) if os.path.exists(xml) else (0, 0, [], [])
     if code not in (0, 5) and f == 0:
         f, names = 1, ['%s (pytest exit %d, see %s)' % (name, code, log)]
-    text = '== pytest %s ... %d passed, %d failed (%.0f s)' % (name, p, f, time.monotonic() - started)
+    text = '== pytest %s ... %d passed, %d failed%s (%.0f s)' % (name, p, f, skip_note(s), time.monotonic() - started)
     if f:
         with open(log) as out:
             text += '\n   --- tail of %s ---\n%s' % (log, out.read()[-3000:])
@@ -178,7 +185,7 @@ def run_all(args):
                 jobs.append((path, run_rostest_file, os.path.join(OUT, 'rostest')))
     for _, _, folder in jobs:
         os.makedirs(folder, exist_ok=True)
-    totals = [0, 0, 0, []]
+    totals = [0, 0, [], []]
     lock = threading.Lock()
 
     def count(result):
@@ -247,8 +254,8 @@ def main():
     args = parser.parse_args()
     shutil.rmtree(OUT, ignore_errors=True)
     os.makedirs(OUT)
-    passed = failed = skipped = 0
-    failures = []
+    passed = failed = 0
+    skipped, failures = [], []
     parts = []
     if not args.unit_only:
         parts.append(run_launch_checks)
@@ -257,12 +264,12 @@ def main():
         p, f, s, names = part(args)
         passed, failed, skipped = passed + p, failed + f, skipped + s
         failures += names
+    # A test skips only where this machine cannot give what it needs (test/machine.py), saying what in one line.
+    for name in skipped:
+        print('SKIPPED: %s' % name)
     for name in failures:
         print('FAILED: %s' % name)
-    line = 'tests: %d passed, %d failed' % (passed, failed)
-    if skipped:
-        line += ', %d skipped' % skipped
-    print(line)
+    print('tests: %d passed, %d failed, %d skipped' % (passed, failed, len(skipped)))
     return 1 if failed or passed == 0 else 0
 
 

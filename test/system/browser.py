@@ -26,6 +26,8 @@ class Browser:
 
     def __init__(self, timeout_s=30.0):
         self.timeout_s = timeout_s
+        if CHROMIUM is None:
+            raise BrowserError('no chromium on PATH (make provision installs it)')
         self.profile = tempfile.mkdtemp(prefix='chromium-')
         to_child, self._to_browser = os.pipe()
         self._from_browser, from_child = os.pipe()

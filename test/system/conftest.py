@@ -11,6 +11,7 @@ import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
+sys.path.insert(0, os.path.join(ROOT, 'test'))      # machine: what this machine lets a test do
 from closed_loop import netenv  # noqa: E402
 # Bounds that only catch hangs.
 MASTER_WAIT_S = 20.0

@@ -12,7 +12,8 @@ import time
 import pytest
 import rosbag
 
-from browser import CHROMIUM, Browser
+import machine
+from browser import Browser
 from conftest import ROOT
 
 SWEEP = textwrap.dedent("""\
@@ -145,7 +146,7 @@ def test_episode_bag_writes_a_clean_bag_that_replays_into_subscribers(swept, tmp
     assert got['/clock'] == sorted(got['/clock']) and got['/clock'][-1] == pytest.approx(float(rows[index]['time_s']), abs=0.02)
 
 
-@pytest.mark.skipif(CHROMIUM is None, reason='no chromium (tools/provision.sh installs it)')
+@machine.needs_network_namespace()
 def test_the_report_renders_in_a_headless_browser_with_its_table_and_pictures(swept):
     os.makedirs(SHOTS, exist_ok=True)
     url = 'file://' + str(swept / 'report.html')

@@ -32,8 +32,14 @@ def package_files():
     return names
 
 
+def plain(env):
+    """``env`` as a user's shell has it before they source anything: no ROS workspace, no venv, and none of
+    Python's own variables (``PYTHONUNBUFFERED``, ``PYTHONDONTWRITEBYTECODE``, ...), which a user's machine lacks."""
+    return {k: v for k, v in env.items() if k not in ROS_WORKSPACE_VARIABLES and not k.startswith('PYTHON')}
+
+
 def clean_env(tmp_path):
-    env = {k: v for k, v in os.environ.items() if k not in ROS_WORKSPACE_VARIABLES}
+    env = plain(os.environ)
     env['PATH'] = PLAIN_PATH
     env['HOME'] = str(tmp_path)
     env.pop('PWD', None)
@@ -72,9 +78,7 @@ def test_lint_clean_and_the_install_space_runs_the_demo_without_the_venv_on_path
     assert site, 'closed_loop.sim.sensors is not installed'
 
     port = free_port()
-    launch_env = ros_env(tmp_path, port)
-    for name in ROS_WORKSPACE_VARIABLES:
-        launch_env.pop(name, None)
+    launch_env = plain(ros_env(tmp_path, port))
     launch_env.update(PATH=PLAIN_PATH, HOME=str(tmp_path))
     launch_env.pop('PWD', None)
     log_path = tmp_path / 'demo.log'
@@ -99,11 +103,12 @@ def test_lint_clean_and_the_install_space_runs_the_demo_without_the_venv_on_path
             if 'data: "' in seen:
                 break
             time.sleep(1.0)
-        with open(str(log_path)) as f:
-            text = f.read()
-        assert 'data: "CLEAR"' in seen or 'data: "SLOW"' in seen or 'data: "STOP"' in seen, \
-            'no mode from the installed controller:\n%s\n--- demo log ---\n%s' % (seen, text[-4000:])
-        assert str(install) in text or 'process[sim-' in text, text[-4000:]
-        assert 'process has died' not in text, text[-4000:]
     finally:
         stop(demo)
+    # Read once the launch has ended: roslaunch's output to a file is block-buffered (no PYTHONUNBUFFERED here).
+    with open(str(log_path)) as f:
+        text = f.read()
+    assert 'data: "CLEAR"' in seen or 'data: "SLOW"' in seen or 'data: "STOP"' in seen, \
+        'no mode from the installed controller:\n%s\n--- demo log ---\n%s' % (seen, text[-4000:])
+    assert str(install) in text or 'process[sim-' in text, text[-4000:]
+    assert 'process has died' not in text, text[-4000:]

@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+import machine
 from conftest import ROOT, stop
 
 from closed_loop import netenv
@@ -76,6 +77,7 @@ def test_env_sh_sets_loopback_only_when_the_user_chose_nothing(environ, expected
     assert got == want
 
 
+@machine.needs_network_namespace()
 def test_demo_graph_listens_on_loopback_and_comes_up_where_the_host_name_does_not_resolve(tmp_path):
     tag = secrets.token_hex(3)
     peer_ns, graph_end, peer_end = 'clpeer%s' % tag, 'clg%s' % tag, 'clp%s' % tag

@@ -9,6 +9,7 @@ import time
 
 import rosbag
 
+import machine
 from conftest import ROOT, free_port, ros_env, stop, wait_master
 
 RECORD_S = 6.0
@@ -57,6 +58,7 @@ def run_demo(tmp_path, *launch_args, seconds=30):
     return done.returncode, done.stdout.decode(errors='replace')
 
 
+@machine.needs_mount()
 def test_a_read_only_bag_folder_fails_the_run(tmp_path):
     read_only = tmp_path / 'ro'
     read_only.mkdir()

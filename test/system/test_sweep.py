@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+import machine
 from conftest import ROOT, free_port
 
 from closed_loop.batch import sweep, sweep_file, sweep_report, tune_thresholds
@@ -201,7 +202,7 @@ print(json.dumps({'full': full, 'resumed': sweep('--resume')}))
 """
 
 
-@pytest.mark.skipif(os.geteuid() != 0, reason='mounts a small tmpfs (in a mount namespace of its own): needs root')
+@machine.needs_mount()                   # a small tmpfs, in a mount namespace of its own
 def test_a_full_disk_is_one_line_with_the_room_needed_and_the_rows_stay_whole_for_resume(tmp_path, hand_cluster):
     address, _ = hand_cluster
     spec = tmp_path / 'quick.yaml'

@@ -5,6 +5,10 @@ import sys
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'src'))
 if SRC not in sys.path:
     sys.path.insert(0, SRC)
+# test/machine.py: what this machine lets a test do.
+TEST = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
+if TEST not in sys.path:
+    sys.path.insert(0, TEST)
 
 
 class SimWithSensors:

@@ -6,7 +6,7 @@ import subprocess
 import sys
 import tempfile
 
-import pytest
+import machine
 
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'src'))
 CHECK = """
@@ -23,7 +23,7 @@ print(ranges.tolist(), k, wave_kernel.wave.stats.cache_path is None or not os.ac
 """
 
 
-@pytest.mark.skipif(os.geteuid() != 0 or not shutil.which('setpriv'), reason='needs root and setpriv')
+@machine.needs_capabilities_dropped()
 def test_where_no_cache_can_be_written_the_loops_compile_in_the_process():
     folder = tempfile.mkdtemp(prefix='closed_loop_read_only_')
     try:
@@ -33,15 +33,17 @@ def test_where_no_cache_can_be_written_the_loops_compile_in_the_process():
         for here, dirs, files in os.walk(folder):
             for name in dirs + files:
                 os.chmod(os.path.join(here, name), 0o555 if name in dirs else 0o444)
-        env = dict(os.environ, HOME='/nonexistent', PYTHONPATH=folder, PYTHONDONTWRITEBYTECODE='1')
-        env.pop('NUMBA_CACHE_DIR', None)
-        as_nobody = ['setpriv', '--reuid', 'nobody', '--regid', 'nogroup', '--clear-groups', sys.executable, '-c']
-        if subprocess.run(as_nobody + ['pass'], env=env, cwd='/', stdout=subprocess.DEVNULL,
-                          stderr=subprocess.DEVNULL, timeout=60).returncode:
-            pytest.skip('this interpreter does not run as nobody (%s: in a folder only root may read)'
-                        % sys.executable)
-        done = subprocess.run(as_nobody + ['import os\n' + CHECK], env=env, cwd='/', stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
+        os.chmod(folder, 0o555)
+        # The home is the read-only folder too: without capabilities even root cannot make ~/.cache there (a home
+        # that does not exist would not do: root owns / and could make it).
+        env = dict(os.environ, HOME=folder, PYTHONPATH=folder, PYTHONDONTWRITEBYTECODE='1')
+        for name in ('NUMBA_CACHE_DIR', 'XDG_CACHE_HOME'):
+            env.pop(name, None)
+        # The tests' own interpreter and packages, wherever they live and whoever may read them: only the
+        # permission bits stop a write.
+        check = machine.as_unprivileged([sys.executable, '-c', 'import os\n' + CHECK])
+        done = subprocess.run(check, env=env, cwd='/', stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              universal_newlines=True, timeout=120)
         assert done.returncode == 0, done.stdout[-2000:]
         assert done.stdout.strip().splitlines()[-1] == '[1.5, inf] 4 True'
         assert not any('__pycache__' in dirs for _, dirs, _ in os.walk(folder))
