@@ -1,6 +1,10 @@
 """Packaging: what catkin installs is complete (every node script, every Python package)."""
 import os
 import re
+import shutil
+import subprocess
+
+import pytest
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..'))
 
@@ -36,3 +40,75 @@ def test_developer_tools_are_not_executables_for_catkin():
         path = os.path.join(ROOT, 'tools', name)
         if os.path.isfile(path):       # (a directory, such as a __pycache__ of `make compat`, is not a program)
             assert not os.access(path, os.X_OK), 'tools/%s is executable' % name
+
+
+#: Every program the package, its tools and its tests run: the Debian package that has it (tools/provision.sh
+#: installs it) and its rosdep key in package.xml (None where rosdep has none; package.xml says why in a comment).
+PROGRAMS = {
+    'bash': ('bash', None), 'sleep': ('coreutils', 'coreutils'), 'timeout': ('coreutils', 'coreutils'),
+    'seq': ('coreutils', 'coreutils'), 'hostname': ('hostname', None), 'mount': ('mount', None),
+    'umount': ('mount', None), 'unshare': ('util-linux', 'util-linux'), 'nsenter': ('util-linux', 'util-linux'),
+    'setpriv': ('util-linux', 'util-linux'), 'ip': ('iproute2', 'iproute2'), 'ss': ('iproute2', 'iproute2'),
+    'pgrep': ('procps', 'procps'), 'git': ('git', 'git'), 'Xvfb': ('xvfb', 'xvfb'), 'xwd': ('x11-apps', None),
+    'chromium': ('chromium', 'chromium-browser'), 'cmake': ('cmake', 'cmake'), 'g++': ('g++', None),
+    'catkin_make': ('catkin', 'catkin'), 'roscore': ('python3-roslaunch', 'roslaunch'),
+    'roslaunch': ('python3-roslaunch', 'roslaunch'), 'rosmaster': ('python3-rosmaster', 'rosmaster'),
+    'rostest': ('python3-rostest', 'rostest'), 'rosbag': ('python3-rosbag', 'rosbag'),
+    'rostopic': ('python3-rostopic', 'rostopic'), 'rosparam': ('python3-rosparam', 'rosparam'),
+    'rosrun': ('rosbash', 'rosbash'), 'dpkg-query': ('dpkg', None),
+}
+#: Debian's Essential packages, on every Debian system and never removed: provisioning need not name them.
+ESSENTIAL = {'bash', 'dpkg'}
+#: Programs run from shell text (test_network's graph script) or named apart from a call (machine.py's setpriv),
+#: which the scan below cannot see.
+RUN_FROM_TEXT = {'nsenter', 'ss', 'hostname', 'timeout', 'seq', 'setpriv', 'g++', 'cmake'}
+#: A call's program: the first item of an argument list handed to subprocess (or a test's own ``sh``), and
+#: ``shutil.which``'s argument.
+#: tools/fresh.py runs on the developer's machine around the package (debootstrap, chroot), not in it; it installs
+#: debootstrap itself.
+AROUND = {os.path.join('tools', 'fresh.py')}
+CALLED = re.compile(r"(?:Popen|run|call|check_output|check_call|\bsh)\(\s*\[\s*'([^']+)'|which\('([^']+)'\)")
+
+
+def called_programs():
+    found = set()
+    for top in ('src', 'tools', 'test'):
+        for folder, dirs, files in os.walk(os.path.join(ROOT, top)):
+            dirs[:] = [d for d in dirs if d != '__pycache__']
+            for name in files:
+                if name.endswith('.py') and os.path.relpath(os.path.join(folder, name), ROOT) not in AROUND:
+                    with open(os.path.join(folder, name)) as f:
+                        found.update(a or b for a, b in CALLED.findall(f.read()))
+    return {name for name in found if '/' not in name and name not in ('chromium-browser', 'sys.executable')}
+
+
+def test_every_program_run_is_provisioned_and_declared():
+    called = called_programs()
+    assert called >= {'roslaunch', 'ip', 'unshare', 'Xvfb', 'xwd'}      # the scan sees the calls it is for
+    unknown = called - set(PROGRAMS)
+    assert not unknown, ('add %s to PROGRAMS here with its Debian package (in tools/provision.sh) and rosdep key '
+                         '(in package.xml)' % sorted(unknown))
+    assert not RUN_FROM_TEXT - set(PROGRAMS)
+    provisioned = set(re.search(r'APT_PACKAGES=\((.*?)\)', read('tools/provision.sh'), re.S).group(1).split())
+    declared = set(re.findall(r'<(?:\w+_)?depend>([^<]+)</', read('package.xml')))
+    not_provisioned = {name: package for name, (package, _) in PROGRAMS.items()
+                       if package not in provisioned | ESSENTIAL}
+    assert not not_provisioned, 'tools/provision.sh does not install: %s' % not_provisioned
+    undeclared = {name: key for name, (_, key) in PROGRAMS.items() if key is not None and key not in declared}
+    assert not undeclared, 'package.xml does not declare: %s' % undeclared
+
+
+def test_each_program_comes_from_the_debian_package_named_for_it():
+    dpkg = shutil.which('dpkg-query')
+    if dpkg is None:
+        pytest.skip('not a Debian system: no dpkg-query to ask which package has a program')
+    for name, (package, _) in sorted(PROGRAMS.items()):
+        path = shutil.which(name)
+        assert path is not None, '%s is not installed (make provision installs %s)' % (name, package)
+        real = os.path.realpath(path)
+        # Debian's merged /usr: a package may list /bin/ip for /usr/bin/ip.
+        candidates = {path, real} | {p[len('/usr'):] for p in (path, real) if p.startswith('/usr/')}
+        owners = subprocess.run(['dpkg-query', '-S'] + sorted(candidates), stdout=subprocess.PIPE,
+                                stderr=subprocess.DEVNULL, universal_newlines=True).stdout
+        found = {line.split(':')[0] for line in owners.splitlines() if ':' in line}
+        assert any(owner == package or owner.startswith(package + '-') for owner in found), (name, package, found)
