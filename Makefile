@@ -4,7 +4,7 @@
 SHELL := /bin/bash
 IN_ENV := source ./env.sh &&
 
-.PHONY: provision demo test unit rostest bench screenshot compat clean
+.PHONY: provision demo test unit rostest bench screenshot compat fresh clean
 
 provision:
 	@bash tools/provision.sh
@@ -27,6 +27,11 @@ screenshot: provision
 # The ROS-free unit tests under Python 3.8 (ROS Noetic's), where a python3.8 exists (PATH or pyenv).
 compat:
 	@bash tools/compat.sh
+
+# The two commands above on a bare Debian bookworm made with debootstrap, in a clean environment (tools/fresh.py;
+# as root; about 20 minutes). Run it before resolving an issue that touches provisioning, tests or dependencies.
+fresh:
+	@/usr/bin/python3 tools/fresh.py $(FRESH_ARGS)
 
 clean:
 	rm -rf .ws .venv38 test_output
