@@ -177,6 +177,9 @@ def inside(root, cache, target):
     def mount(*argv):
         subprocess.run(['mount'] + list(argv), check=True)
     at = lambda *parts: os.path.join(root, *parts)  # noqa: E731
+    # The root a mount of its own, as / is on any machine: `unshare --propagation` and `ip netns exec` change
+    # the propagation of /, which only a mount point has.
+    mount('--bind', root, root)
     mount('-t', 'proc', 'proc', at('proc'))
     mount('-t', 'sysfs', 'sysfs', at('sys'))
     mount('--rbind', '/dev', at('dev'))

@@ -38,7 +38,8 @@ LISTEN = re.compile(r'^LISTEN\s+\d+\s+\d+\s+(\S+):(\d+)\s+\S+\s+users:\(\("([^"]
 
 
 def sh(*argv):
-    subprocess.run(argv, check=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    done = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+    assert done.returncode == 0, '%s: exit %d: %s' % (' '.join(argv), done.returncode, done.stdout.strip())
 
 
 def listeners(text):
