@@ -25,7 +25,8 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), 
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop.batch.episode import EpisodeSpec, load_episode_world, prepare, run_episode  # noqa: E402
-from closed_loop.batch.lockstep import Tap, command_delay_steps  # noqa: E402
+from closed_loop.batch.lockstep import Tap  # noqa: E402
+from closed_loop.sim.scheduler import command_delay_steps  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 from closed_loop.sim.rig import Rig  # noqa: E402
 from closed_loop.sim.sensors.contacts import Contacts  # noqa: E402
@@ -140,7 +141,7 @@ def driven_floor(spec, cache, commands, simulated_s):
     rig = Rig(prepared.world, prepared.sim_params, prepared.profile.urdf)
     try:
         sim = rig.sim
-        delay = command_delay_steps(spec, sim.dt_s)
+        delay = command_delay_steps(spec.command_delay_s, sim.dt_s)
         due = [(k + delay, command) for k, command in commands.sent]
         steps = int(round(simulated_s / sim.dt_s))
         started = time.process_time()

@@ -1,5 +1,6 @@
 """The judge's rules (closed_loop.batch.judge), the rostest checker's comparison (scenario_test), and how a
 graph episode's controller and launch file are made (closed_loop.batch.graph_episode)."""
+import dataclasses
 import math
 import xml.etree.ElementTree as ET
 
@@ -133,7 +134,11 @@ def test_the_episode_launch_file_passes_the_args_and_sets_no_substitution_from_d
     root = ET.fromstring(text)
     args = {a.get('name'): a.get('value') for a in root.findall('arg')}
     assert args['goal_x'] == '6.0' and args['time_limit'] == '30' and args['world'] == 'obstacle_left'
-    assert args['real_time_factor'] == str(graph_episode.REAL_TIME_FACTOR)
+    # In lockstep by default, commands reaching the wheels as the spec says; a real_time_factor selects real time.
+    assert args['lockstep'] == 'true' and 'real_time_factor' not in args and args['command_delay'] == '0.01'
+    real_time = graph_episode.launch_text(dataclasses.replace(spec, real_time_factor=2.0), prepare(spec), str(tmp_path))
+    real_args = {a.get('name'): a.get('value') for a in ET.fromstring(real_time).findall('arg')}
+    assert real_args['lockstep'] == 'false' and real_args['real_time_factor'] == '2.0'
     include = [i for i in root.findall('include') if 'my_pkg' in i.get('file')][0]
     assert include.get('file') == '$(find my_pkg)/launch/c.launch' and include.get('pass_all_args') == 'true'
     assert [(a.get('name'), a.get('value')) for a in include.findall('arg')] == [('speed', '0.4')]

@@ -54,7 +54,9 @@ class EpisodeSpec:
     ``end_on_contact``: end the episode at the physics step of its first contact (outcome 'collided',
     one contact), where a sweep asks only whether there was one. A ``controller`` that is a mapping makes a
     graph episode (``closed_loop.batch.graph_episode``): ``{launch: PKG/path.launch, args: {...}}`` or
-    ``{node: NAME}``, its simulator at ``real_time_factor`` (None: the measured default)."""
+    ``{node: NAME}``, its simulator in lockstep with it (``real_time_factor`` None), or in real time at that many
+    simulated s per wall s, for a node that cannot be lockstepped. ``command_delay_s`` is when a command reaches
+    the wheels, in process and in a lockstepped graph alike."""
     world: object = 'wall'
     robot: str = 'closed_loop'
     controller: object = 'stop_on_obstacle'

@@ -3,7 +3,9 @@ package's cores (a node of yours, in Python or C++), or one of ours run as its n
 is other processes.
 
 Each graph episode is a real graph of its own: a master on a free loopback port (``graph_keeper``), its
-own ``ROS_HOME`` and log folder, the simulator (``sim.launch``, on simulated time at ``real_time_factor``),
+own ``ROS_HOME`` and log folder, the simulator (``sim.launch``, in lockstep with the graph: simulated time goes on
+only once every node has answered, ``closed_loop.nodes.sim_lockstep``; or, where the spec gives a
+``real_time_factor``, in real time at that factor),
 ``robot_state_publisher``, the controller (a launch file of yours with its args, or a node of this package
 with its settings), and the scenario judge, whose verdict (``closed_loop.batch.judge``, the rules of every
 episode) is the result. Its row has the columns of an in-process episode, and ``logs``, the episode's folder
@@ -30,10 +32,8 @@ from closed_loop.batch.episode import EpisodeError, generated_world, judge_setti
 from closed_loop.batch.judge import Verdict, track_from_dict
 from closed_loop.yaml_check import quote
 
-#: Simulated s per wall s in a graph episode, unless the spec says: the fastest at which a graph episode
-#: still agrees with real time (docs/episodes.md, "Graph episodes": measured).
-REAL_TIME_FACTOR = 4.0
-#: Wall time (s) a graph gets to start, and its slack beyond the scenario's simulated time.
+#: Wall time (s) a graph gets to start, and its slack beyond the scenario's simulated time (in lockstep, the
+#: scenario's simulated time counts as wall time: a lockstepped graph slower than real time is waited for).
 STARTUP_S, SLACK_S = 40.0, 20.0
 #: After the verdict or an error, how long the keeper gets to shut the graph down (s).
 SHUTDOWN_S = graph_keeper.GRACE_S + 10.0
@@ -112,11 +112,14 @@ def launch_text(spec, prepared, folder, bag=None):
     elif os.path.isfile(world):
         world = os.path.abspath(world)
     judge = judge_settings(spec, p.controller_class)
-    rtf = spec.real_time_factor or REAL_TIME_FACTOR
-    args = {'world': world, 'robot': spec.robot, 'real_time_factor': rtf, 'camera': p.sim_params['camera'],
+    rtf = spec.real_time_factor
+    args = {'world': world, 'robot': spec.robot, 'camera': p.sim_params['camera'], 'lockstep': rtf is None,
+            'command_delay': spec.command_delay_s,
             'time_limit': judge.time_limit, 'end_on_contact': judge.end_on_contact,
             'end_at_rest': c.get('end_at_rest', judge.end_at_rest), 'success_radius': judge.success_radius,
             'verdict_file': os.path.join(folder, 'verdict.json'), 'keep_track': spec.keep_trajectory}
+    if rtf is not None:
+        args['real_time_factor'] = rtf
     if p.goal_world is not None:
         args['goal_x'], args['goal_y'] = p.goal_world
     if bag is not None:
@@ -132,8 +135,9 @@ def launch_text(spec, prepared, folder, bag=None):
     lines = ['<launch>'] + ['  <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
                             for k, v in sorted(args.items())]
     lines.append('  <include file="$(find closed_loop)/launch/scenario.launch" pass_all_args="true"/>')
-    # Every step's clock goes out, faster than real time too: the nodes' timers run on it.
-    sim = dict(p.sim_params, max_clock_rate_hz=p.sim_params.get('physics_rate_hz', 100.0) * max(rtf, 1.0))
+    sim = dict(p.sim_params)
+    if rtf is not None:    # in real time, every step's clock goes out, faster than real time too: timers run on it
+        sim['max_clock_rate_hz'] = p.sim_params.get('physics_rate_hz', 100.0) * max(rtf, 1.0)
     sim.pop('camera')
     lines += ['  <param name=%s value=%s/>' % (quoteattr('/sim/' + k), quoteattr(_value(v))) for k, v in sorted(sim.items())]
     if node:
@@ -243,8 +247,8 @@ def _set_aside(folder):
 
 def _wait(spec, folder, keeper):
     """(the verdict, (its trajectory, contact log) or Nones, None) or (None, None, why there is none)."""
-    rtf = spec.real_time_factor or REAL_TIME_FACTOR
-    deadline = time.monotonic() + STARTUP_S + spec.time_limit_s / rtf + SLACK_S
+    budget_s = STARTUP_S + spec.time_limit_s / (spec.real_time_factor or 1.0) + SLACK_S
+    deadline = time.monotonic() + budget_s
     verdict_file = os.path.join(folder, 'verdict.json')
     while time.monotonic() < deadline:
         if os.path.exists(verdict_file):
@@ -263,5 +267,4 @@ def _wait(spec, folder, keeper):
                 return None, None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))
             return None, None, 'the launch ended before a verdict: %s' % _tail(os.path.join(folder, 'graph.log'))
         time.sleep(0.2)
-    return None, None, 'no verdict within %.0f s of wall time: %s' % (
-        STARTUP_S + spec.time_limit_s / rtf + SLACK_S, _tail(os.path.join(folder, 'graph.log')))
+    return None, None, 'no verdict within %.0f s of wall time: %s' % (budget_s, _tail(os.path.join(folder, 'graph.log')))

@@ -3,8 +3,9 @@ lockstep, deterministic, free of ROS, and judged by the judge (``closed_loop.bat
 
 Timing, as the graph has it, on simulated time: physics at ``physics_rate_hz``; a LIDAR scan every period,
 handed to the controller at its stamp (in the graph it arrives a few milliseconds of wall time later,
-within the physics step); the controller's timer at its ``rate_hz``, ``timer_phase_s`` (default 0.05 s,
-half a LIDAR period: the mean of a phase the node's start-up puts anywhere) after each scan; a command,
+within the physics step); the controller's timer at its ``rate_hz``, first at ``timer_phase_s`` (default 0.05 s,
+half a LIDAR period: the mean of a phase a real-time node's start-up puts anywhere; a lockstepped graph's node,
+started with the scenario, ticks first one period in) and every period after; a command,
 from the timer or at once from a scan (new danger), reaches the wheels ``command_delay_s`` later. That
 delay is one physics step: the reaction benchmark (``bench_loop``) measures scan-to-zero-command delivery
 of a few milliseconds at real time, and the simulator applies a command at its next physics step. The
@@ -30,6 +31,7 @@ from closed_loop.control.vision import VisionSettings, detect_red
 from closed_loop.controllers import Context, Odom
 from closed_loop.geometry import quaternion_yaw
 from closed_loop.sim.rig import Rig
+from closed_loop.sim.scheduler import command_delay_steps
 from closed_loop.sim.sensors.camera import Camera
 from closed_loop.sim.sensors.clearance import Clearance
 from closed_loop.sim.sensors.contacts import Contacts
@@ -103,8 +105,10 @@ def _loop(spec, rig, controller, judge, tap):
     dt = sim.dt_s
     steps_per_scan = max(1, int(round(lidar.period_s / dt)))
     steps_per_tick = max(1, int(round(1.0 / controller.settings.rate_hz / dt)))
-    phase = int(round(spec.timer_phase_s / dt)) % steps_per_tick
-    delay = command_delay_steps(spec, dt)
+    # The first tick at timer_phase_s, then every period: a phase of one period is a timer that starts with the
+    # scenario, as a lockstepped graph's nodes' do (a ROS timer fires first a period after it is made).
+    phase = int(round(spec.timer_phase_s / dt))
+    delay = command_delay_steps(spec.command_delay_s, dt)
     camera = rig.sensors.get(Camera) if controller.uses_camera else None
     if camera is not None:
         steps_per_frame = max(1, int(round(camera.period_s / dt)))
@@ -125,7 +129,7 @@ def _loop(spec, rig, controller, judge, tap):
     stepped = tap.stepped if type(tap).stepped is not Tap.stepped else None
     for k in range(last + 1):
         now = sim.time_s
-        sent = None
+        sent = []                     # what the controller sends at this instant, in order (a scan's, a tick's)
         if k == next_event:
             scan_due, frame_due, tick_due = k == next_scan, k == next_frame, k == next_tick
             odo = sim.odometry
@@ -135,7 +139,7 @@ def _loop(spec, rig, controller, judge, tap):
                 scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
                             lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
                 tap.scan(now, scan.ranges)
-                sent = controller.on_scan(now, scan, odom)
+                sent.append(controller.on_scan(now, scan, odom))
             if frame_due:
                 next_frame += steps_per_frame
                 # What vision_node does in the graph: a red_centroid only for a frame with red in it.
@@ -146,7 +150,7 @@ def _loop(spec, rig, controller, judge, tap):
                     controller.on_detection(found.centroid_px[0], now, odom)
             if tick_due:
                 next_tick += steps_per_tick
-                sent = controller.on_tick(now, odom)
+                sent.append(controller.on_tick(now, odom))
             next_event = min(next_scan, next_tick, next_frame)
             tap.decided(now)
             controller.take_transitions()       # what the node logs; an episode keeps only the mode
@@ -154,10 +158,11 @@ def _loop(spec, rig, controller, judge, tap):
             if _judge(sim, judge, now, command, controller.mode, lookout):
                 return
             judge_from = judge.due_from()
-        if sent is not None:
-            pending.append((k + delay, validate_command(*sent)))
-            tap.command(now, pending[-1][1])
-            apply_at = pending[0][0]
+        for command_sent in sent:
+            if command_sent is not None:
+                pending.append((k + delay, validate_command(*command_sent)))
+                tap.command(now, pending[-1][1])
+                apply_at = pending[0][0]
         if k >= apply_at:
             while pending and pending[0][0] <= k:
                 _, cmd = pending.pop(0)
@@ -173,11 +178,6 @@ def _loop(spec, rig, controller, judge, tap):
             judge.on_contact(sim.time_s, len(began), began, _pose(sim) if judge.contact_log is not None else None)
             if judge.ended:
                 return
-
-
-def command_delay_steps(spec, dt_s):
-    """How many physics steps after it is sent a command reaches the wheels (at least one)."""
-    return max(1, int(round(spec.command_delay_s / dt_s)))
 
 
 def _judge(sim, judge, now, command, mode, lookout):

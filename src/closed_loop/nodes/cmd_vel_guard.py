@@ -106,6 +106,8 @@ class CmdVelGuard(StopsOnShutdown):
             self._decide(only_if_stricter=True)
 
     def _on_silence(self, silent_s):
+        if self._scan is None and self._scan_refused is None:
+            return            # no scan yet, so nothing passed yet (as the controller node: see there)
         with self.lock:
             if not self._closing:
                 self._send(0.0, 0.0, GuardVerdict.VETOED, 'no scan received for %.2f s of wall time '

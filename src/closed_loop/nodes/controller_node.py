@@ -27,8 +27,8 @@ from closed_loop.sources import SourceCheck
 from closed_loop.watchdog import SilenceWatchdog
 
 ODOM_FRAME = 'odom'
-#: How long a goal's transform into odom is waited for (s).
-TF_WAIT_S = 0.5
+#: How long a goal's transform into odom is waited for (s of ROS time).
+GOAL_WAIT_S = 2.0
 
 
 class RosLog(Log):
@@ -101,9 +101,9 @@ class ControllerNode(StopsOnShutdown):
         self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
         if cls.uses_odom:
             rospy.Subscriber('odom', Odometry, self._on_odom, queue_size=1)
+        self._tf = None          # made at the first goal (listening to /tf costs every node's TF message)
+        self._goal_msg = None     # (PoseStamped, when it came) of a goal not yet brought into odom
         if cls.uses_goal:
-            self._tf = tf2_ros.Buffer()
-            self._tf_listener = tf2_ros.TransformListener(self._tf)
             rospy.Subscriber('move_base_simple/goal', PoseStamped, self._on_goal, queue_size=1)
         if cls.uses_camera:
             rospy.Subscriber('camera/camera_info', CameraInfo, self._on_camera_info, queue_size=1)
@@ -170,11 +170,19 @@ class ControllerNode(StopsOnShutdown):
             self.odom = odom
 
     def _tick(self):
+        if self._goal_msg is not None:
+            self._try_goal()
         with self.lock:
             if not self._closing:
                 self._send(self.core.on_tick(self._now(), self.odom))
 
     def _on_silence(self, silent_s):
+        # Before the first scan nothing has been sent that a stop would end; a stop then would only say how long
+        # the graph took to start in wall time (and a lockstepped scenario would depend on it): it waits, with a
+        # line in the log.
+        if not self._scan_seen:
+            rospy.loginfo_throttle(LOG_PERIOD_S * 5, 'waiting for the first scan on %s' % rospy.resolve_name('scan'))
+            return
         with self.lock:
             if not self._closing:
                 self._send(self.core.on_silence(self._now(), silent_s))
@@ -190,16 +198,35 @@ class ControllerNode(StopsOnShutdown):
             self.core.on_detection(msg.point.x, stamp_to_sec(msg.header.stamp), self.odom)
 
     def _on_goal(self, msg):
+        # TF is listened to from the first goal on (a listener pays for every TF message of the graph); a goal whose
+        # frame cannot be brought into odom yet is tried again at each tick, for GOAL_WAIT_S of ROS time.
+        if self._tf is None:
+            self._tf = tf2_ros.Buffer()
+            self._tf_listener = tf2_ros.TransformListener(self._tf)
+        with self.lock:
+            self._goal_msg = (msg, self._now())
+        self._try_goal()
+
+    def _try_goal(self):
+        """Take the pending goal if its frame can be brought into odom now (at its stamp, else the latest)."""
+        with self.lock:
+            if self._goal_msg is None:
+                return
+            msg, since = self._goal_msg
         source = msg.header.frame_id or self.frames['odom']
-        t = None
-        for stamp in (msg.header.stamp, rospy.Time(0)):     # at the goal's time, else the latest transform
+        t = error = None
+        for stamp in (msg.header.stamp, rospy.Time(0)):
             try:
-                t = self._tf.lookup_transform(self.frames['odom'], source, stamp, rospy.Duration(TF_WAIT_S))
+                t = self._tf.lookup_transform(self.frames['odom'], source, stamp)
                 break
             except (tf2_ros.LookupException, tf2_ros.ConnectivityException, tf2_ros.ExtrapolationException) as e:
                 error = e
         if t is None:
-            rospy.logerr('goal ignored: cannot bring frame %r into %s: %s', source, self.frames['odom'], error)
+            if self._now() - since >= GOAL_WAIT_S:
+                with self.lock:
+                    self._goal_msg = None
+                rospy.logerr('goal ignored: cannot bring frame %r into %s within %g s: %s', source, self.frames['odom'],
+                             GOAL_WAIT_S, error)
             return
         r = t.transform.rotation
         yaw = quaternion_yaw((r.x, r.y, r.z, r.w))
@@ -207,6 +234,9 @@ class ControllerNode(StopsOnShutdown):
         goal = (t.transform.translation.x + math.cos(yaw) * px - math.sin(yaw) * py,
                 t.transform.translation.y + math.sin(yaw) * px + math.cos(yaw) * py)
         with self.lock:
+            if self._goal_msg is None or self._goal_msg[0] is not msg:
+                return                                  # a newer goal came meanwhile
+            self._goal_msg = None
             try:
                 self.core.set_goal(goal, self._now())
             except ControllerError as error:

@@ -26,11 +26,19 @@ from closed_loop import netenv
 CALL_TIMEOUT_S = 2.0
 
 
+#: Topics whose connections a scenario need not wait for: the nodes' log lines.
+LOGGING = ('/rosout', '/rosout_agg')
+
+
 def wanted(state, node, out_topics=None):
     """The connections ``(publisher, topic, subscriber)`` that ``node`` needs, from the master's
     ``getSystemState``: one from every publisher of each topic it subscribes to, and one to every subscriber
-    of each topic it publishes (of ``out_topics`` only, if given)."""
+    of each topic it publishes (of ``out_topics`` only, if given); ``node`` None: every connection of the graph
+    but its logging's."""
     publishers, subscribers = dict(state[0]), dict(state[1])
+    if node is None:
+        return sorted((p, topic, s) for topic, nodes in subscribers.items() if topic not in LOGGING
+                      for s in nodes for p in publishers.get(topic, ()) if p != s)
     inbound = {(p, topic, node) for topic, nodes in subscribers.items() if node in nodes
                for p in publishers.get(topic, ()) if p != node}
     outbound = {(node, topic, s) for topic, nodes in publishers.items() if node in nodes
@@ -54,7 +62,7 @@ def bus_info(master, node, caller_id):
 
 def missing(master, node, caller_id, out_topics=None):
     """The connections of :func:`wanted` that their publishers do not list yet, as ``'P -> TOPIC -> S'``
-    lines; [] once all are made. ``master``: a ``rosgraph.Master``."""
+    lines; [] once all are made. ``master``: a ``rosgraph.Master``; ``node`` None: the whole graph."""
     try:
         pairs = wanted(master.getSystemState(), node, out_topics)
     except (rosgraph.MasterException, OSError) as error:
@@ -63,23 +71,48 @@ def missing(master, node, caller_id, out_topics=None):
     return ['%s -> %s -> %s' % pair for pair in pairs if not listed(rows[pair[0]], pair[1], pair[2])]
 
 
+def unrecorded(master, recorders):
+    """``'RECORDER does not read TOPIC'`` for each topic published (but logging and the recorder's own) that one of
+    ``recorders`` has not subscribed to yet."""
+    if not recorders:
+        return []
+    try:
+        state = master.getSystemState()
+    except (rosgraph.MasterException, OSError) as error:
+        return ['the master: %s' % error]
+    subscribers = dict(state[1])
+    return ['%s does not read %s' % (recorder, topic) for topic, nodes in state[0] if topic not in LOGGING
+            for recorder in sorted(recorders) if set(nodes) - {recorder} and recorder not in subscribers.get(topic, ())]
+
+
 def start_when_ready(start):
     """Call ``start.unpause`` (a std_srvs/Empty service: the simulator's) once some node publishes cmd_vel, each
-    of the ``start.wait_for`` topics has a publisher, and the cmd_vel publishers' connections are made (then
-    ``start.settle`` more), or after ``start.ready_timeout`` anyway, with a warning that says what was missing.
-    ``start``: a :class:`closed_loop.batch.judge.StartSettings`."""
+    of the ``start.wait_for`` topics has a publisher, and every connection of the graph is made (each subscriber
+    to each publisher of its topic: the controller's, and the judge's, the recorder's, any node's, so that nothing
+    sent at the start is lost or late, then ``start.settle`` more), or after ``start.ready_timeout`` anyway, with
+    a warning that says what was missing. ``start``: a :class:`closed_loop.batch.judge.StartSettings`."""
     topic, master = rospy.resolve_name('cmd_vel'), rosgraph.Master(rospy.get_name())
     deadline = time.monotonic() + start.ready_timeout
+    try:
+        # First the simulator itself: once it serves unpause, every topic of its is registered, and the connections
+        # to them are among those waited for below (a check made before would not know them).
+        rospy.wait_for_service(start.unpause, timeout=start.ready_timeout + 1.0)
+    except rospy.ROSException as error:
+        rospy.logerr('cannot start the simulation (%s): %s', start.unpause, error)
+        return False
     publishers = _wait_for_publisher(master, topic, deadline)
+    recorders = set()
     for other in start.wait_for.split():
-        if publishers and not _wait_for_publisher(master, rospy.resolve_name(other), deadline):
+        found = _wait_for_publisher(master, rospy.resolve_name(other), deadline) if publishers else []
+        recorders.update(found)
+        if publishers and not found:
             rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', other, start.ready_timeout)
     if not publishers:
         rospy.logwarn('no node publishes %s after %g s: starting the simulation anyway', topic, start.ready_timeout)
     else:
-        lacking = _wait_for_connections(master, publishers, topic, deadline)
+        lacking = _wait_for_connections(master, deadline, recorders)
         if lacking:
-            rospy.logwarn('%d connection%s of the controller not made after %g s (%s): starting the simulation '
+            rospy.logwarn('%d connection%s of the graph not made after %g s (%s): starting the simulation '
                           'anyway', len(lacking), '' if len(lacking) == 1 else 's', start.ready_timeout,
                           ', '.join(lacking[:3]) + (', ...' if len(lacking) > 3 else ''))
         else:
@@ -87,7 +120,6 @@ def start_when_ready(start):
             rospy.loginfo('the controller is up (%s publishes %s, connected): starting the simulation',
                           publishers[0], topic)
     try:
-        rospy.wait_for_service(start.unpause, timeout=start.ready_timeout + 1.0)
         rospy.ServiceProxy(start.unpause, Empty)()
     except (rospy.ROSException, rospy.ServiceException) as error:
         rospy.logerr('cannot start the simulation (%s): %s', start.unpause, error)
@@ -108,12 +140,12 @@ def _wait_for_publisher(master, topic, deadline):
     return []
 
 
-def _wait_for_connections(master, nodes, topic, deadline):
-    """Wait until each of ``nodes`` (the publishers of cmd_vel) has every connection it needs made: from each
-    publisher of what it subscribes to, and to each subscriber of ``topic``. The connections still missing at
-    ``deadline`` (wall clock), [] once all are made."""
+def _wait_for_connections(master, deadline, recorders=()):
+    """Wait until every connection of the graph is made, and each of ``recorders`` (the nodes that publish a
+    ``wait_for`` topic: a recorder) subscribes to every topic published. What is still missing at ``deadline``
+    (wall clock), [] once all is there."""
     while True:
-        lacking = [line for node in nodes for line in missing(master, node, rospy.get_name(), {topic})]
+        lacking = unrecorded(master, recorders) + missing(master, None, rospy.get_name())
         if not lacking or rospy.is_shutdown() or time.monotonic() >= deadline:
             return lacking
         time.sleep(0.05)

@@ -1,7 +1,7 @@
 """Sensor readings as ROS messages: one conversion per sensor of closed_loop.sim.sensors, for sim_node's table.
 
 A conversion is ``convert(port, sensor, reading, stamp)`` and returns ``[(topic, message), ...]``; ``port`` is
-the robot's side of the simulator node (``closed_loop.nodes.sim_node.RobotPort``): it may ask
+the robot's side of the simulator node (``closed_loop.nodes.robot_port.RobotPort``): it may ask
 ``port.wanted(topic)`` to skip building messages nobody subscribes to; ``port.settings`` is the robot's
 SimSettings (URDF frame names), and ``port.frame(name)`` the frame id on the wire (with the robot's TF
 prefix in a multi-robot world, ``r1/base_scan``). Topics are relative to the robot's namespace.

@@ -7,7 +7,6 @@ from collections import namedtuple
 
 import rospkg
 import rospy
-from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
@@ -16,11 +15,12 @@ from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
-from closed_loop.sim import drive, world as world_mod
+from closed_loop.sim import world as world_mod
 from closed_loop import robot_model
 from closed_loop.nodes import sensor_messages as to_msgs
-from closed_loop.nodes.common import LOG_PERIOD_S, Publisher, init_node, load_settings
-from closed_loop.nodes.conversions import connected_publishers, message_callerid
+from closed_loop.nodes import sim_lockstep
+from closed_loop.nodes.common import Publisher, init_node, load_settings
+from closed_loop.nodes.robot_port import RobotPort
 from closed_loop.sim.scheduler import ClockSchedule, Schedule, SchedulingSettings
 from closed_loop.sim.sensors.camera import Camera
 from closed_loop.sim.sensors.clearance import Clearance
@@ -30,7 +30,6 @@ from closed_loop.sim.sensors.odometry import Odometry as OdometrySensor
 from closed_loop.sim.sensors.wheels import WheelEncoders
 from closed_loop.sim.sensors.world_state import WorldState
 from closed_loop.sim.simulation import RobotSetup, SimSettings, Simulation
-from closed_loop.sources import SourceCheck
 
 #: One line per sensor: its core class (closed_loop.sim.sensors), its publications (topic, type, queue size,
 #: latched), its conversion (closed_loop.nodes.sensor_messages), whether it is sampled only while one of
@@ -64,104 +63,6 @@ PAUSED_POLL_S = 0.01
 def package_path():
     """closed_loop's share folder (source tree or install space), where worlds/ and urdf/ live."""
     return rospkg.RosPack().get_path('closed_loop')
-
-
-class RobotPort:
-    """One robot's side of the simulator node: its sensors and their publishers, its ``cmd_vel`` input and
-    its frame names. The only robot of a one-robot world has no name: its topics are relative to the node's
-    namespace (``scan``) and its frames are the URDF's (``base_scan``). Robot NAME of a multi-robot world
-    has its topics under NAME (``NAME/scan``, ``NAME/cmd_vel``) and its frames prefixed (``NAME/base_scan``,
-    ``NAME/odom``), as robot_state_publisher prefixes them with the robot's ``tf_prefix``. What is the
-    world's rather than a robot's (``world_markers``) is served once, by the first robot's port."""
-
-    def __init__(self, node, index, setup):
-        self.name = setup.name
-        self.settings = setup.settings
-        self.view = node.sim.view(index)
-        self._topic_prefix = setup.name + '/' if setup.name else ''
-        self._frame_prefix = setup.name + '/' if setup.name else ''
-        namespaces = ('/%s/sim/' % setup.name, '~') if setup.name else ('~',)
-        self.sensors = []
-        self.publishers = {}
-        for line in SENSORS:
-            if line.shared and index > 0:
-                continue
-            settings = (load_settings(line.sensor.settings_class, namespaces)
-                        if line.sensor.settings_class else None)
-            sensor = line.sensor(settings, self.view)
-            if not sensor.available:
-                rospy.loginfo('sim_node: no %s on %s (or turned off)', line.sensor.__name__.lower(),
-                              self.label)
-                continue
-            self.sensors.append((line, sensor))
-            for topic, msg_type, queue, latched in line.publications:
-                self.publishers[topic] = Publisher(self.topic(topic, line.shared), msg_type,
-                                                         queue_size=queue, latch=latched)
-        self._lock = threading.Lock()
-        self._pending_command = None
-        self._cmd_source = SourceCheck(rospy.resolve_name(self.topic('cmd_vel')))
-        self.cmd_sub = rospy.Subscriber(self.topic('cmd_vel'), Twist, self._on_cmd_vel, queue_size=10)
-        self.publishers['contact_count'].publish(UInt32(0))
-
-    @property
-    def label(self):
-        return 'robot %r' % self.name if self.name else 'the robot'
-
-    def describe(self):
-        return '%s (%s) with %s' % (self.label, self.view.model.source,
-                                  ', '.join(type(sensor).__name__ for _, sensor in self.sensors))
-
-    def topic(self, name, shared=False):
-        """A topic of this robot: global ones (``/tf``) and the world's as they are, the others under the
-        robot's name."""
-        return name if shared or name.startswith('/') else self._topic_prefix + name
-
-    def frame(self, name):
-        """A URDF frame name as this robot's messages carry it."""
-        return self._frame_prefix + name
-
-    def wanted(self, topic):
-        """True if ``topic`` has a subscriber (messages nobody listens to are not built)."""
-        return self.publishers[topic].get_num_connections() > 0
-
-    # -- input (a subscriber thread): store, and let the loop act ----------------------------------------------
-    def _on_cmd_vel(self, msg):
-        conflict = self._cmd_source.observe(message_callerid(msg), None, time.monotonic(),
-                                            connected_publishers(self.cmd_sub))
-        if conflict is not None:
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: %s' % conflict.replace(
-                'stopping until only one remains', 'the base obeys each message as it comes'))
-        try:
-            twist = drive.validate_twist((msg.linear.x, msg.linear.y, msg.linear.z),
-                                         (msg.angular.x, msg.angular.y, msg.angular.z))
-        except drive.CommandError as error:
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: rejected cmd_vel: %s; braking' % error)
-            twist = drive.STOP
-        for clipped in drive.clipped_fields(twist, self.settings.max_linear_speed,
-                                            self.settings.max_angular_speed):
-            rospy.logwarn_throttle(LOG_PERIOD_S, 'sim_node: cmd_vel from %s: %s'
-                                   % (message_callerid(msg) or 'an unknown publisher', clipped))
-        with self._lock:
-            self._pending_command = twist
-
-    # -- the loop's side -----------------------------------------------------------------------------------------
-    def take_command(self):
-        with self._lock:
-            command, self._pending_command = self._pending_command, None
-        if command is not None:
-            self.view.command(command)
-
-    def reset(self):
-        for _line, sensor in self.sensors:
-            sensor.reset()
-        self.publishers['contact_count'].publish(UInt32(0))
-
-    def serve(self, line, sensor, stamp):
-        """Sample ``sensor`` and publish its messages (a lazy sensor only while someone listens)."""
-        if line.lazy and not any(self.wanted(topic) for topic, _, _, _ in line.publications):
-            return
-        for topic, msg in line.convert(self, sensor, sensor.sample(self.view), stamp):
-            self.publishers[topic].publish(msg)
 
 
 class SimNode:
@@ -223,7 +124,9 @@ class SimNode:
         starts = {spec.name: spec.start for spec in world.robots} or {'': world.robot_start}
         setups = [RobotSetup(setup.name, setup.settings, setup.urdf, starts[setup.name]) for setup in setups]
         self.sim = Simulation(world, self.settings, robots=setups)
-        self.ports = [RobotPort(self, index, setup) for index, setup in enumerate(setups)]
+        self.launch_nodes = (sim_lockstep.LaunchNodes([rospy.resolve_name(RobotPort.command_topic(setup.name))
+                                                       for setup in setups]) if self.scheduling.lockstep else None)
+        self.ports = [RobotPort(self, index, setup, SENSORS) for index, setup in enumerate(setups)]
         rospy.loginfo('sim_node: world %r from %s; %s; real_time_factor %g', world.name, path,
                       '; '.join(port.describe() for port in self.ports), self.scheduling.real_time_factor)
         self._lock = threading.Lock()
@@ -232,7 +135,8 @@ class SimNode:
         if self._paused:
             rospy.loginfo('sim_node: paused at t = 0 until ~unpause_physics')
         self._stopped = threading.Event()
-        self.clock_pub = Publisher('/clock', Clock, queue_size=10)
+        self.clock_pub = self.publisher('/clock', Clock, 10)
+        self.missed_pub = sim_lockstep.missed_publisher() if self.scheduling.lockstep else None
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))
         rospy.Service('~pause_physics', Empty, lambda _: self._request('pause'))
         rospy.Service('~unpause_physics', Empty, lambda _: self._request('unpause'))
@@ -276,15 +180,21 @@ class SimNode:
         return EmptyResponse()
 
     def _take_inputs(self):
-        with self._lock:
-            requests, self._requests = self._requests, []
         for port in self.ports:
             port.take_command()
+        self._take_requests()
+
+    def _take_requests(self):
+        """Carry out the service requests (True if the world was reset)."""
+        with self._lock:
+            requests, self._requests = self._requests, []
+        reset = False
         for what, done in requests:
             if what == 'reset':
                 self.sim.reset_world()
                 for port in self.ports:
                     port.reset()
+                reset = True
                 rospy.loginfo('sim_node: world reset')
             elif what == 'pause':
                 self._paused = True
@@ -293,18 +203,31 @@ class SimNode:
                 self._paused = False
                 rospy.loginfo('sim_node: unpaused')
             done.set()
+        return reset
 
     # -- the loop: the only code that calls the simulation ----------------------------------------------------
-    def run(self):
-        s = self.scheduling
-        sim = self.sim
-        schedule = Schedule(sim.dt_s)
+    def _schedule(self):
+        """The schedule of every port's sensors on simulated time, and {task name: (port, line, sensor)}."""
+        schedule = Schedule(self.sim.dt_s)
         tasks = {}
         for port in self.ports:
             for line, sensor in port.sensors:
                 name = '%s/%s' % (port.name, type(sensor).__name__)
                 schedule.add(name, sensor.period_s, sensor.offset_s)
                 tasks[name] = (port, line, sensor)
+        return schedule, tasks
+
+    def run(self):
+        if self.scheduling.lockstep:
+            sim_lockstep.run(self)
+        else:
+            self._run_real_time()
+        self.sim.close()
+
+    def _run_real_time(self):
+        s = self.scheduling
+        sim = self.sim
+        schedule, tasks = self._schedule()
         wall_ref, sim_ref = time.monotonic(), sim.time_s
         clock = ClockSchedule(s, sim.dt_s, time.monotonic())
         self._publish_clock()
@@ -333,11 +256,18 @@ class SimNode:
                     rospy.logwarn_throttle(10.0, 'sim_node: cannot keep real_time_factor %g; running slower'
                                            % s.real_time_factor)
                     wall_ref, sim_ref = time.monotonic(), t
-        sim.close()
 
     # -- outputs -----------------------------------------------------------------------------------------------
-    def _publish_clock(self):
-        self.clock_pub.publish(Clock(clock=rospy.Time.from_sec(self.sim.time_s)))
+    def publisher(self, topic, msg_type, queue_size, latch=False):
+        """A publisher of the simulator's (in lockstep, written through to the launch's nodes: sim_lockstep)."""
+        publisher = Publisher(topic, msg_type, queue_size=queue_size, latch=latch)
+        return publisher if self.launch_nodes is None else sim_lockstep.write_through(publisher, self.launch_nodes)
+
+    def _publish_clock(self, stamp=None):
+        stamp = rospy.Time.from_sec(self.sim.time_s) if stamp is None else stamp
+        self.clock_pub.publish(Clock(clock=stamp))
+        if self.launch_nodes is not None:
+            sim_lockstep.set_own_time(stamp)
 
 
 def main():

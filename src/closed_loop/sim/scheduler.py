@@ -16,6 +16,20 @@ class SchedulingSettings:
                                      minimum=1.0)
     paused: bool = param(False, '', 'start with physics paused at t = 0 (/clock at 0, no sensor data) until '
                          '~unpause_physics is called (scenario.launch: its judge does, once the controller is up)')
+    lockstep: bool = param(False, '', 'simulated time goes on only once every node of the launch has done all that '
+                           'the last instant (its sensor messages, then /clock) asked of it, as fast as they answer; '
+                           'real_time_factor is then not used (docs/own_controller.md, "Lockstep")')
+    lockstep_timeout: float = param(2.0, 's', 'in lockstep, the wall time a node may stay busy at one instant; '
+                                    'then the instant counts as missed (~missed_ticks), the base acts on the commands '
+                                    'it has, and that node is not waited for until it is next seen idle',
+                                    minimum=0.01, maximum=60.0)
+    clock_every_step: bool = param(False, '', 'in lockstep, /clock goes out at every physics step; false: at every step '
+                                   'with sensor messages, and at the others only if a node commanded at one in the '
+                                   'first 2 s of simulated time (a timer off the sensors\' instants)')
+    command_delay: float = param(0.01, 's', 'in lockstep, a command heard at an instant reaches the wheels this much '
+                                 'simulated time later, in whole physics steps and at least one (an in-process '
+                                 "episode's command_delay_s); in real time, commands act at the next step",
+                                 minimum=0.0, maximum=1.0)
 
 
 class Schedule:
@@ -33,6 +47,10 @@ class Schedule:
 
     def add(self, name, period_s=None, offset_s=0.0):
         self._tasks.append([name, period_s, offset_s])
+
+    def periodic_due(self, t_s):
+        """True if a task with a period (not one of every step) will be due at ``t_s``; nothing advances."""
+        return any(period is not None and t_s >= next_s - self._half_step_s for _, period, next_s in self._tasks)
 
     def due(self, t_s):
         names = []
@@ -71,3 +89,10 @@ class ClockSchedule:
             return False
         self._next_wall_s = max(self._next_wall_s + self._period_s, now_wall_s)
         return True
+
+
+def command_delay_steps(delay_s, step_s):
+    """How many physics steps after it is sent a command reaches the wheels: ``delay_s`` in whole steps, at least
+    one (the step it was sent in is already under way). One rule for the simulator node in lockstep and for an
+    in-process episode."""
+    return max(1, int(round(delay_s / step_s)))

@@ -1,0 +1,199 @@
+"""The simulator node's loop in lockstep (``~lockstep``): simulated time goes on only once the graph has done all
+that the last instant asked of it (``closed_loop.quiescence``).
+
+Each physics step's instant ``t`` goes out in this order, the graph quiet after each part:
+
+1. ``/clock`` at 1 ns before ``t``, then the sensor messages stamped ``t``, one sensor at a time (odometry before
+   the scan, as the node's table has them), the clock and each sensor read by every node before the next goes
+   out: a callback sees the clock at its message's instant (to the nanosecond) and the odometry of that instant
+   beside the scan;
+2. ``/clock`` at 1 ns after ``t``: every timer due at ``t`` fires now, after the messages of ``t``, so it sees
+   the newest scan every time, whatever its node's threads do. (Not at ``t`` itself: rospy takes a clock of 0 for
+   one not yet started and starts its timers from the first that is not, so at 0 the timers' first tick would
+   slip to a step after their first period; 1 ns after every instant, a timer made at 0 fires first at its
+   period, in rospy and roscpp alike.)
+3. the commands heard during 1 and 2 are queued to reach the wheels ``~command_delay`` later (whole physics
+   steps, at least one: as an in-process episode's ``command_delay_s``), and physics steps on.
+
+Where the timers are is learned, not declared: for the first :data:`LEARN_S` of simulated time part 2 comes at
+every step, and the simulator notes at which steps of a simulated second a command followed ``/clock`` itself (a
+timer's tick, directly or through other nodes). From then on part 2 comes only at those steps of each second
+(part 1 moves the clock anyway, to 1 ns before each step with sensor messages), so a node's timer at 10 Hz costs
+ten of them a second, not a hundred. A timer that commanded nothing in that time, or one that starts later off
+those steps, fires at the next ``/clock`` instead, up to a sensor period late, the same way every time.
+``~clock_every_step`` keeps part 2 at every step.
+A node that stays busy past ``~lockstep_timeout`` of wall time makes the instant *missed*: the count goes out on
+``~missed_ticks`` (std_msgs/UInt32, latched), and the base acts on the commands it has.
+
+What a node of the launch is sent goes out in the simulator's own thread, before the wait that follows (rospy's
+synchronous publishing); to any other subscriber (``rostopic echo``, rviz, ``rosbag record`` started apart) it
+goes through rospy's queue, so a watcher that stops reading drops messages and holds nothing up.
+"""
+import collections
+import os
+import threading
+import time
+import xmlrpc.client
+
+import rosgraph
+import rospy
+from std_msgs.msg import UInt32
+
+from closed_loop import netenv
+from closed_loop.nodes.common import Publisher
+from closed_loop.quiescence import Participants, Quiescence
+from closed_loop.sim.scheduler import command_delay_steps
+
+#: The clock of a step's sensor messages, and of its timers: this much before and after the step's instant.
+BEFORE = AFTER = rospy.Duration(0, 1)
+#: Simulated time (s) from the start in which /clock goes out at every step, and the steps of a second at which a
+#: command follows it are learned.
+LEARN_S = 2.0
+#: Idle sleep while paused (s).
+PAUSED_POLL_S = 0.01
+#: Wall time (s) a look-up of a subscriber's process may take.
+LOOKUP_S = 2.0
+
+
+def missed_publisher():
+    """``~missed_ticks`` (std_msgs/UInt32, latched), at 0: made with the simulator's other topics, before it serves
+    unpause, so that a scenario's judge is connected to it before the start."""
+    publisher = Publisher('~missed_ticks', UInt32, queue_size=1, latch=True)
+    publisher.publish(UInt32(0))
+    return publisher
+
+
+class LaunchNodes:
+    """Which nodes take part in the lockstep: the processes of the launch that started the simulator (its parent
+    roslaunch's descendants) and the master, but rosout, and of the simulator's own threads those that read
+    ``inbound`` topics (rospy names a subscription's threads after its topic)."""
+
+    def __init__(self, inbound):
+        master = netenv.master_pid(rosgraph.get_master_uri())
+        self.inbound = set(inbound)
+        self.participants = Participants(os.getppid(), extra=[master] if master else [],
+                                         exclude={self._pid('/rosout')} - {None}, own_threads=self._own_threads)
+        self._known = {}
+
+    def _own_threads(self):
+        return {thread.native_id for thread in threading.enumerate() if thread.name in self.inbound}
+
+    def has(self, caller_id):
+        """True if node ``caller_id`` runs in one of the launch's processes (asked of it and the master once)."""
+        if caller_id not in self._known:
+            self._known[caller_id] = self._pid(caller_id) in self.participants.pids()
+        return self._known[caller_id]
+
+    @staticmethod
+    def _pid(caller_id):
+        try:
+            uri = rosgraph.Master(rospy.get_name()).lookupNode(caller_id)
+            code, _, pid = netenv.bounded_proxy(uri, LOOKUP_S).getPid(rospy.get_name())
+            return pid if code == 1 else None
+        except (rosgraph.MasterException, OSError, xmlrpc.client.Error, ValueError):
+            return None
+
+
+def write_through(publisher, launch_nodes):
+    """``publisher`` writes each message to the launch's own nodes in the publishing thread, and through rospy's
+    queue to any other subscriber (see the module's doc). Call it as soon as the publisher is made."""
+    impl = publisher.impl
+    add = impl.add_connection
+    lock = threading.Lock()
+
+    def add_connection(connection):
+        if not launch_nodes.has(connection.endpoint_id):
+            return add(connection)
+        with lock:
+            queue_size, impl.queue_size = impl.queue_size, None     # rospy's synchronous publishing
+            try:
+                return add(connection)
+            finally:
+                impl.queue_size = queue_size
+    impl.add_connection = add_connection
+    return publisher
+
+
+def keep_own_time():
+    """Stop the simulator hearing its own ``/clock`` (rospy subscribes every node on simulated time to it): each
+    message would wake a thread of ours that competes with the loop for Python's lock; the loop sets the
+    simulator's ROS time itself as it publishes (:func:`set_own_time`). Where rospy keeps its subscription
+    elsewhere, nothing changes."""
+    from rospy.impl import simtime
+    subscriber = getattr(simtime, '_clock_sub', None)
+    if subscriber is not None:
+        subscriber.unregister()
+
+
+def set_own_time(stamp):
+    rospy.rostime._set_rostime(stamp)
+
+
+def run(node):
+    """The lockstep loop of :class:`closed_loop.nodes.sim_node.SimNode` ``node`` until shutdown."""
+    s, sim = node.scheduling, node.sim
+    schedule, tasks = node._schedule()
+    delay = command_delay_steps(s.command_delay, sim.dt_s)
+    step_ns = int(round(sim.dt_s * 1e9))
+    learn_steps, second_steps = int(round(LEARN_S / sim.dt_s)), int(round(1.0 / sim.dt_s))
+    keep_own_time()
+    missed_pub = node.missed_pub
+    gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout)
+    queued = collections.deque()          # (step, port, command), in the order heard
+    ticks = set()                         # steps of a second (k mod second_steps) at which a command followed /clock
+    missed = 0
+    rospy.loginfo('sim_node: lockstep: each instant waits for the graph (at most %g s of wall time), commands '
+                  'reach the wheels %d physics step%s later', s.lockstep_timeout, delay, '' if delay == 1 else 's')
+    ahead = False                         # the clock of the coming step's sensor messages is out already
+    try:
+        while not node._stopped.is_set() and not rospy.is_shutdown():
+            if node._take_requests():
+                queued.clear()
+                ahead = False
+            if node._paused:
+                time.sleep(PAUSED_POLL_S)
+                continue
+            k = int(round(sim.time_s / sim.dt_s))
+            # The instant in whole nanoseconds from the step count (the float sum of steps drifts: 190 steps of
+            # 0.01 s make 1.8999999999999997 s, and a timer due at 1.9 s would wait for the next step).
+            stamp = rospy.Time(0, k * step_ns)
+            # Every sensor's messages are made first (the world stands still within an instant), while the
+            # nodes take in the clock that went out before physics stepped here.
+            lines = [(port, messages) for port, messages in
+                     ((tasks[name][0], tasks[name][0].messages(tasks[name][1], tasks[name][2], stamp))
+                      for name in schedule.due(sim.time_s)) if messages]
+            if lines and not ahead and k > 0:          # (at t = 0 the clock reads 0 already)
+                node._publish_clock(stamp - BEFORE)
+            gate.wait()                                # every node has the clock before the messages
+            for port, messages in lines:
+                port.publish(messages)
+                gate.wait()
+            heard = [(port, port.heard()) for port in node.ports]
+            learning = k < learn_steps
+            if learning or s.clock_every_step or k % second_steps in ticks:
+                node._publish_clock(stamp + AFTER)
+                gate.wait()
+                after_clock = [(port, port.heard()) for port in node.ports]
+                if learning and any(command is not None for _, command in after_clock):
+                    ticks.add(k % second_steps)
+                heard += after_clock
+            if k == learn_steps and not s.clock_every_step:
+                rospy.loginfo('sim_node: lockstep: /clock goes out with every sensor message and at %d of the %d '
+                              'steps of each second (where a timer commanded)', len(ticks), second_steps)
+            if gate.missed != missed:
+                missed = gate.missed
+                missed_pub.publish(UInt32(missed))
+                rospy.logwarn_throttle(10.0, 'sim_node: lockstep: %d instant%s missed (a node busy for over %g s '
+                                       'of wall time)' % (missed, '' if missed == 1 else 's', s.lockstep_timeout))
+            queued.extend((k + delay, port, command) for port, command in heard if command is not None)
+            while queued and queued[0][0] <= k:
+                _, port, command = queued.popleft()
+                port.view.command(command)
+            # The next step's clock for its sensor messages goes out now, and the nodes take it in while physics
+            # steps (everything of this instant is done: nothing can see it early).
+            ahead = schedule.periodic_due(sim.time_s + sim.dt_s)
+            if ahead:
+                node._publish_clock(rospy.Time(0, (k + 1) * step_ns) - BEFORE)
+            sim.step()
+    finally:
+        gate.close()

@@ -1,0 +1,255 @@
+"""When a graph's processes have done all that what they were given asks of them: the simulator's lockstep.
+
+Free of ROS: it reads ``/proc``. A lockstepped simulator publishes what happens at one instant, then waits until
+every process that takes part in the graph is *quiet*: each of its threads asleep, and none of them run while it
+looked. Then every message sent has been read and every callback it started has returned, whatever the nodes
+are written in and however they are threaded (a command sent from a scan's callback, from a timer woken by
+``/clock``, or from a node that was itself woken by another node); only then does simulated time go on.
+
+How it is seen: each thread's count of run time and time slices (``/proc/PID/task/TID/schedstat``), read twice,
+and between the two readings its state (``.../stat``). The graph is quiet when no count changed between the
+readings and no thread was running or waiting to run (a thread being woken on another CPU shows as running,
+though no count of the machine's runnable tasks has it yet): then no participant ran while we looked, and none
+will until something new reaches it. A message in flight on loopback is delivered, and its reader woken, before
+the sender's write returns (or by the kernel's ``ksoftirqd`` threads, which are watched too where this machine
+shows them).
+
+What takes part: the processes a root process (the launch that started the simulator) started, at any depth, and
+the ROS master (a node that asks it something, a parameter or even rospy's own check at every line it logs, waits
+asleep for its answer: the master's threads are watched, and the new one it starts for each request is seen as a
+change in its count of threads); but not rosout, which only collects log lines; and of the simulator's own threads
+those that read what the graph sends it (its subscriptions' threads). A node that waits on something outside all
+these (a server elsewhere) looks idle while it waits: the simulator goes on without its answer. They are looked up again every ``refresh_s`` of wall time
+(a node that starts later, a respawned one). A process that stays busy past ``timeout_s`` of wall time is
+*missed*: the wait ends, the instant counts as missed, and that process is not waited for again until it is
+seen quiet (a hung node costs one timeout, not one per instant). A node that sleeps on something that never
+comes (a service that does not answer) is quiet: it simply does not answer, the same way every time.
+"""
+import os
+import threading
+import time
+
+#: States of a thread that is not working: asleep (S), stopped (T, t: SIGSTOP or a debugger), dead (Z, X), idle
+#: kernel thread (I). Running or runnable (R) and in uninterruptible sleep (D: I/O it asked for) are busy.
+QUIET_STATES = frozenset((b'S', b'T', b't', b'Z', b'X', b'I'))
+#: Pause between two readings while something is busy (s): short, so that a wait costs little more than what
+#: the nodes do, and not nothing, so that the simulator leaves the CPU to them.
+POLL_S = 50e-6
+
+
+class Participants:
+    """The processes that take part: ``root_pid``'s descendants and ``extra`` pids but ``exclude`` ones; of the
+    calling process (``own_pid``), only the threads ``own_threads()`` names (native ids; None: all but the
+    calling thread)."""
+
+    def __init__(self, root_pid, own_pid=None, own_tid=None, extra=(), exclude=(), own_threads=None):
+        self.root_pid = root_pid
+        self.own_pid = os.getpid() if own_pid is None else own_pid
+        self.own_tid = threading.get_native_id() if own_tid is None else own_tid
+        self.extra = tuple(extra)
+        self.exclude = set(exclude)
+        self.own_threads = own_threads
+
+    def pids(self):
+        """The participants' pids now (the calling process among them; the root itself is not)."""
+        children = {}
+        for name in os.listdir('/proc'):
+            if name.isdigit():
+                ppid = _ppid(int(name))
+                if ppid is not None:
+                    children.setdefault(ppid, []).append(int(name))
+        found, todo = set(), [self.root_pid] if self.root_pid else []
+        while todo:
+            for child in children.get(todo.pop(), ()):
+                if child not in found:
+                    found.add(child)
+                    todo.append(child)
+        found.update(pid for pid in self.extra if os.path.exists('/proc/%d' % pid))
+        found -= self.exclude
+        found.add(self.own_pid)
+        return found
+
+    def threads(self, pid):
+        """The thread ids of process ``pid`` that take part."""
+        if pid == self.own_pid and self.own_threads is not None:
+            return set(self.own_threads()) - {self.own_tid}
+        return {int(tid) for tid in os.listdir('/proc/%d/task' % pid)} - {self.own_tid}
+
+    @staticmethod
+    def kernel_threads():
+        """The kernel's softirq threads, where this machine shows them (not inside a PID namespace)."""
+        found = []
+        for name in os.listdir('/proc'):
+            if name.isdigit():
+                try:
+                    with open('/proc/%s/comm' % name) as f:
+                        if f.read().startswith('ksoftirqd/'):
+                            found.append(int(name))
+                except OSError:
+                    pass
+        return found
+
+
+def _ppid(pid):
+    try:
+        with open('/proc/%d/stat' % pid, 'rb') as f:
+            return int(f.read().rsplit(b')', 1)[1].split()[1])
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _open(path):
+    try:
+        return os.open(path, os.O_RDONLY)
+    except OSError:
+        return None
+
+
+def _read(fd, size):
+    """What an open /proc file says now (b'' once its thread is gone)."""
+    try:
+        return os.pread(fd, size, 0)
+    except OSError:
+        return b''
+
+
+def _state(stat):
+    """A thread's state letter from the start of its stat line (dead for one that is gone)."""
+    if not stat:
+        return b'X'
+    close = stat.rfind(b')')
+    return stat[close + 2:close + 3] if close >= 0 else b'R'     # (a name cut off by the read: not seen, busy)
+
+
+class Quiescence:
+    """``wait()`` until the participants are quiet, or ``timeout_s`` of wall time; the count of misses is kept.
+
+    ``participants``: a :class:`Participants`; ``refresh_s``: how often (wall s) the set of processes is
+    looked up again. Their threads are listed again whenever a process's count of threads changes."""
+
+    def __init__(self, participants, timeout_s, refresh_s=0.5, clock=time.monotonic):
+        self.participants = participants
+        self.timeout_s = timeout_s
+        self.refresh_s = refresh_s
+        self.clock = clock
+        self.missed = 0
+        self.excused = set()         # pids missed and not seen quiet since
+        self._kernel = Participants.kernel_threads()
+        self._processes = {}         # pid -> (its stat fd, its count of threads when listed)
+        self._threads = {}           # (pid, tid) -> (stat fd, schedstat fd)
+        self._keys, self._sched, self._stat = [], [], []
+        self._refreshed = -float('inf')
+        self._last = None            # the counts at the end of the last wait
+
+    def close(self):
+        for fd in [fd for fds in self._threads.values() for fd in fds] + [fd for fd, _ in self._processes.values()]:
+            os.close(fd)
+        self._threads.clear()
+        self._processes.clear()
+
+    def wait(self):
+        """True once quiet; False when ``timeout_s`` passed first (a miss: the busy processes are excused)."""
+        now = self.clock()
+        if now - self._refreshed >= self.refresh_s:
+            self._refresh_processes()
+            self._refreshed = now
+        deadline = now + self.timeout_s
+        excused = self.excused
+        before = self._last
+        changed = True                       # whether the thread lists are to be checked
+        while True:
+            if changed and self._threads_changed():      # (a thread started or ended: list them again)
+                self._list_threads()
+                before = None
+            changed = False
+            if before is None or len(before) != len(self._sched):
+                before = _reads(self._sched, 64)
+            after = _reads(self._sched, 64)
+            if after == before and not excused:
+                # Nothing ran between the two readings: are all asleep now, and still nothing ran since?
+                states = _reads(self._stat, 48)
+                again = _reads(self._sched, 64)
+                if again == after and all(_state(stat) in QUIET_STATES for stat in states):
+                    if not self._threads_changed():
+                        self._last = again
+                        return True
+                    changed = True
+                after = again
+            elif excused:
+                states = _reads(self._stat, 48)
+                busy = self._busy(before, after, states)
+                if not busy - excused and not self._threads_changed():
+                    excused &= busy               # an excused process seen quiet is waited for again
+                    self._last = after
+                    return True
+            if self.clock() > deadline:
+                states = _reads(self._stat, 48)
+                self.missed += 1
+                excused |= self._busy(before, after, states)
+                self._last = None
+                return False
+            before = after
+            os.sched_yield()
+
+    def _busy(self, before, after, states):
+        """The pids that ran between the two readings, or are not asleep."""
+        busy = set()
+        for i, key in enumerate(self._keys):
+            if before[i] != after[i] or _state(states[i]) not in QUIET_STATES:
+                busy.add(key[0])
+        return busy
+
+    # -- which processes and threads ---------------------------------------------------------------------------
+    def _refresh_processes(self):
+        pids = self.participants.pids() | set(self._kernel)
+        for pid in set(self._processes) - pids:
+            os.close(self._processes.pop(pid)[0])
+        for pid in pids - set(self._processes):
+            fd = _open('/proc/%d/stat' % pid)
+            if fd is not None:
+                self._processes[pid] = (fd, -1)
+
+    def _threads_changed(self):
+        """True if a process's count of threads differs from when its threads were listed (or it is gone)."""
+        for fd, listed in self._processes.values():
+            stat = _read(fd, 512)
+            if not stat or int(stat[stat.rindex(b')') + 2:].split()[17]) != listed:
+                return True
+        return False
+
+    def _list_threads(self):
+        wanted = set()
+        for pid, (fd, _) in list(self._processes.items()):
+            stat = _read(fd, 512)
+            try:
+                tids = self.participants.threads(pid) if pid not in self._kernel else {pid}
+            except OSError:
+                tids = None
+            if not stat or tids is None:
+                os.close(self._processes.pop(pid)[0])
+                continue
+            self._processes[pid] = (fd, int(stat[stat.rindex(b')') + 2:].split()[17]))
+            wanted.update((pid, tid) for tid in tids)
+        for key in wanted - set(self._threads):
+            folder = '/proc/%d/task/%d/' % key
+            fds = (_open(folder + 'stat'), _open(folder + 'schedstat'))
+            if None in fds:
+                for fd in fds:
+                    if fd is not None:
+                        os.close(fd)
+                continue
+            self._threads[key] = fds
+        for key in set(self._threads) - wanted:
+            for fd in self._threads.pop(key):
+                os.close(fd)
+        self._keys = list(self._threads)
+        self._stat = [self._threads[key][0] for key in self._keys]
+        self._sched = [self._threads[key][1] for key in self._keys]
+
+
+def _reads(fds, size):
+    """What each open /proc file says now, in order (b'' for a thread that is gone)."""
+    try:
+        return [os.pread(fd, size, 0) for fd in fds]
+    except OSError:
+        return [_read(fd, size) for fd in fds]
