@@ -8,22 +8,28 @@ are written in and however they are threaded (a command sent from a scan's callb
 
 How it is seen: each thread's count of run time and time slices (``/proc/PID/task/TID/schedstat``), read twice,
 and between the two readings its state (``.../stat``). The graph is quiet when no count changed between the
-readings and no thread was running or waiting to run (a thread being woken on another CPU shows as running,
-though no count of the machine's runnable tasks has it yet): then no participant ran while we looked, and none
-will until something new reaches it. A message in flight on loopback is delivered, and its reader woken, before
-the sender's write returns (or by the kernel's ``ksoftirqd`` threads, which are watched too where this machine
-shows them).
+readings and no thread was running or waiting to run (a thread being woken on another CPU shows as running, though
+no count of the machine's runnable tasks has it yet): then no participant ran while we looked, and none will until
+something new reaches it. A message in flight on loopback is delivered, and its reader woken, before the sender's
+write returns (or by the kernel's ``ksoftirqd`` threads, which are watched too where this machine shows them).
 
-What takes part: the processes a root process (the launch that started the simulator) started, at any depth, and
-the ROS master (a node that asks it something, a parameter or even rospy's own check at every line it logs, waits
-asleep for its answer: the master's threads are watched, and the new one it starts for each request is seen as a
-change in its count of threads); but not rosout, which only collects log lines; and of the simulator's own threads
-those that read what the graph sends it (its subscriptions' threads). A node that waits on something outside all
-these (a server elsewhere) looks idle while it waits: the simulator goes on without its answer. They are looked up again every ``refresh_s`` of wall time
-(a node that starts later, a respawned one). A process that stays busy past ``timeout_s`` of wall time is
-*missed*: the wait ends, the instant counts as missed, and that process is not waited for again until it is
-seen quiet (a hung node costs one timeout, not one per instant). A node that sleeps on something that never
-comes (a service that does not answer) is quiet: it simply does not answer, the same way every time.
+What takes part: the processes a root process (the launch that started the simulator) started, at any depth; the
+ROS master (a node that asks it something, a parameter or even rospy's own check at every line it logs, waits
+asleep for the answer: the master's threads are watched, and the new thread it starts for each request shows as a
+change in its count of threads); not rosout, which only collects log lines; and the simulator's own threads but
+the one that waits. They are looked up again every ``refresh_s`` of wall time (a node that starts later, a
+respawned one). A node that waits on something outside all these (a server elsewhere) looks idle while it waits:
+the simulator goes on without its answer. A process that stays busy past ``timeout_s`` of wall time is *missed*:
+the wait ends, the instant counts as missed, and that process is not waited for again until it is seen quiet (a
+hung node costs one timeout, not one per instant). A node that sleeps on something that never comes (a service
+that does not answer) is quiet: it simply does not answer, the same way every time.
+
+Pollers: some threads do not wait to be woken but look again on their own, every so often of wall time:
+roscpp's timers and sleeps on simulated time check the clock every millisecond, and ``rospy.wait_for_message``
+checks for its message every 10 ms. Asleep between two looks, such a thread seems done while what it was given
+still waits for it. :meth:`Quiescence.find_pollers` finds them (threads that ran at least :data:`POLLS_MIN` times
+in a moment when nothing was sent), and ``wait(poll=...)`` is not over until each poller of the processes named
+has looked again since the wait began (then the graph is quiet as above).
 """
 import os
 import threading
@@ -32,23 +38,27 @@ import time
 #: States of a thread that is not working: asleep (S), stopped (T, t: SIGSTOP or a debugger), dead (Z, X), idle
 #: kernel thread (I). Running or runnable (R) and in uninterruptible sleep (D: I/O it asked for) are busy.
 QUIET_STATES = frozenset((b'S', b'T', b't', b'Z', b'X', b'I'))
-#: Pause between two readings while something is busy (s): short, so that a wait costs little more than what
-#: the nodes do, and not nothing, so that the simulator leaves the CPU to them.
-POLL_S = 50e-6
+#: A thread that runs this many times in each half of :data:`POLLERS_WINDOW_S` of wall time while nothing is sent is
+#: a poller (one that looks every 25 ms or more often: rospy's own loops look every 0.3 to 0.5 s, roscpp's every
+#: 0.1 s).
+POLLERS_WINDOW_S, POLLS_MIN = 0.1, 2
+#: A poller not seen to look again for this long (wall s) while all else is quiet is one no more (it had run for
+#: another reason while it was watched): it is not waited for again.
+POLLER_GIVE_UP_S = 0.1
+#: ``wait(poll=EVERY)``: the pollers of every process.
+EVERY = object()
 
 
 class Participants:
-    """The processes that take part: ``root_pid``'s descendants and ``extra`` pids but ``exclude`` ones; of the
-    calling process (``own_pid``), only the threads ``own_threads()`` names (native ids; None: all but the
-    calling thread)."""
+    """The processes that take part: ``root_pid``'s descendants and ``extra`` pids but ``exclude`` ones, and the
+    calling process (``own_pid``) but its calling thread (``own_tid``)."""
 
-    def __init__(self, root_pid, own_pid=None, own_tid=None, extra=(), exclude=(), own_threads=None):
+    def __init__(self, root_pid, own_pid=None, own_tid=None, extra=(), exclude=()):
         self.root_pid = root_pid
         self.own_pid = os.getpid() if own_pid is None else own_pid
         self.own_tid = threading.get_native_id() if own_tid is None else own_tid
         self.extra = tuple(extra)
         self.exclude = set(exclude)
-        self.own_threads = own_threads
 
     def pids(self):
         """The participants' pids now (the calling process among them; the root itself is not)."""
@@ -71,8 +81,6 @@ class Participants:
 
     def threads(self, pid):
         """The thread ids of process ``pid`` that take part."""
-        if pid == self.own_pid and self.own_threads is not None:
-            return set(self.own_threads()) - {self.own_tid}
         return {int(tid) for tid in os.listdir('/proc/%d/task' % pid)} - {self.own_tid}
 
     @staticmethod
@@ -140,6 +148,7 @@ class Quiescence:
         self._keys, self._sched, self._stat = [], [], []
         self._refreshed = -float('inf')
         self._last = None            # the counts at the end of the last wait
+        self.pollers = set()         # (pid, tid) of the threads that look again on their own
 
     def close(self):
         for fd in [fd for fds in self._threads.values() for fd in fds] + [fd for fd, _ in self._processes.values()]:
@@ -147,8 +156,25 @@ class Quiescence:
         self._threads.clear()
         self._processes.clear()
 
-    def wait(self):
-        """True once quiet; False when ``timeout_s`` passed first (a miss: the busy processes are excused)."""
+    def find_pollers(self, window_s=POLLERS_WINDOW_S):
+        """Look at the participants for ``window_s`` of wall time, while nothing is sent to them, and keep as pollers
+        the threads that ran at least POLLS_MIN times in each half of it (a thread busy with something that ended
+        meanwhile is not one). Returns them, as (pid, tid)."""
+        self._refresh_processes()
+        self._list_threads()
+        counts = []
+        for _ in range(3):
+            counts.append([_slices(x) for x in _reads(self._sched, 64)])
+            if len(counts) < 3:
+                time.sleep(0.5 * window_s)
+        self.pollers = {key for key, a, b, c in zip(self._keys, *counts) if b - a >= POLLS_MIN and c - b >= POLLS_MIN}
+        self._last = None
+        return self.pollers
+
+    def wait(self, poll=None):
+        """True once quiet; False when ``timeout_s`` passed first (a miss: the busy processes are excused).
+        ``poll``: the pids whose pollers must look again, after the last thing any other thread did, before it is
+        over (EVERY: every process's; None: none)."""
         now = self.clock()
         if now - self._refreshed >= self.refresh_s:
             self._refresh_processes()
@@ -156,26 +182,38 @@ class Quiescence:
         deadline = now + self.timeout_s
         excused = self.excused
         before = self._last
-        changed = True                       # whether the thread lists are to be checked
+        check = True                       # whether the thread lists are to be checked
+        waiting, since = None, now         # {index: time slices} of the pollers yet to look again; since when
         while True:
-            if changed and self._threads_changed():      # (a thread started or ended: list them again)
+            if check and self._threads_changed():      # (a thread started or ended: list them again)
                 self._list_threads()
-                before = None
-            changed = False
+                before, waiting = None, None
+            check = False
             if before is None or len(before) != len(self._sched):
                 before = _reads(self._sched, 64)
+            if waiting is None:
+                waiting = self._pollers_of(poll, before)
             after = _reads(self._sched, 64)
-            if after == before and not excused:
+            moved = self._moved(before, after)
+            if moved:
+                # Something ran: every poller awaited is to look again after it.
+                waiting, since = self._pollers_of(poll, after), self.clock()
+            elif waiting:
+                waiting = {i: n for i, n in waiting.items() if _slices(after[i]) == n}
+                if waiting and self.clock() - since > POLLER_GIVE_UP_S:
+                    self.pollers -= {self._keys[i] for i in waiting}      # (it looks no more: not a poller)
+                    waiting = {}
+            if not moved and not waiting and not excused:
                 # Nothing ran between the two readings: are all asleep now, and still nothing ran since?
                 states = _reads(self._stat, 48)
                 again = _reads(self._sched, 64)
-                if again == after and all(_state(stat) in QUIET_STATES for stat in states):
+                if not self._moved(after, again) and all(_state(stat) in QUIET_STATES for stat in states):
                     if not self._threads_changed():
                         self._last = again
                         return True
-                    changed = True
+                    check = True
                 after = again
-            elif excused:
+            elif excused and not waiting:
                 states = _reads(self._stat, 48)
                 busy = self._busy(before, after, states)
                 if not busy - excused and not self._threads_changed():
@@ -190,6 +228,20 @@ class Quiescence:
                 return False
             before = after
             os.sched_yield()
+
+    def _moved(self, before, after):
+        """True if a thread but a poller ran between the two readings (a poller runs every few ms anyway)."""
+        if before == after:
+            return False
+        pollers = self.pollers
+        return any(b != a and key not in pollers for key, b, a in zip(self._keys, before, after))
+
+    def _pollers_of(self, poll, counts):
+        """{index: time slices in ``counts``} of the pollers of ``poll``'s processes."""
+        if poll is None or not self.pollers or counts is None or len(counts) != len(self._keys):
+            return {}
+        return {i: _slices(counts[i]) for i, key in enumerate(self._keys)
+                if key in self.pollers and (poll is EVERY or key[0] in poll)}
 
     def _busy(self, before, after, states):
         """The pids that ran between the two readings, or are not asleep."""
@@ -245,6 +297,12 @@ class Quiescence:
         self._keys = list(self._threads)
         self._stat = [self._threads[key][0] for key in self._keys]
         self._sched = [self._threads[key][1] for key in self._keys]
+
+
+def _slices(schedstat):
+    """A thread's count of time slices (how many times it has run) from its schedstat line (0 once it is gone)."""
+    fields = schedstat.split()
+    return int(fields[2]) if len(fields) > 2 else 0
 
 
 def _reads(fds, size):

@@ -22,6 +22,7 @@ import math
 import time
 
 import cv2
+import numpy
 
 from closed_loop.batch.episode import judge_settings, result_from_verdict
 from closed_loop.batch.judge import Judge
@@ -115,6 +116,10 @@ def _loop(spec, rig, controller, judge, tap):
         frame_phase = int(round(camera.offset_s / dt)) % steps_per_frame
         vision = VisionSettings()
         controller.on_camera_info(camera.intrinsics.fx, camera.intrinsics.cx, camera.intrinsics.width)
+    # The scan's geometry as a sensor_msgs/LaserScan carries it (float32 fields): the core decides on the numbers
+    # a node gets in the graph (a navigator's choice between two arcs can turn on the last bit of an angle).
+    geometry = tuple(float(numpy.float32(v)) for v in (layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
+                                                         lidar.period_s, ls.range_min, ls.range_max))
     pending = []                      # (step, command), in order
     command = (0.0, 0.0)
     last = int(round(spec.time_limit_s / dt))
@@ -136,8 +141,7 @@ def _loop(spec, rig, controller, judge, tap):
             odom = Odom(odo.x, odo.y, odo.yaw, odo.twist.linear_x, odo.twist.angular_z, now)
             if scan_due:
                 next_scan += steps_per_scan
-                scan = Scan(now, lidar.frame, layout.angle_min, layout.angle_max, layout.angle_increment, 0.0,
-                            lidar.period_s, ls.range_min, ls.range_max, lidar.sample(sim))
+                scan = Scan(now, lidar.frame, *geometry, lidar.sample(sim))
                 tap.scan(now, scan.ranges)
                 sent.append(controller.on_scan(now, scan, odom))
             if frame_due:

@@ -41,7 +41,7 @@ from std_msgs.msg import UInt32
 
 from closed_loop import netenv
 from closed_loop.nodes.common import Publisher
-from closed_loop.quiescence import Participants, Quiescence
+from closed_loop.quiescence import EVERY, Participants, Quiescence
 from closed_loop.sim.scheduler import command_delay_steps
 
 #: The clock of a step's sensor messages, and of its timers: this much before and after the step's instant.
@@ -65,24 +65,30 @@ def missed_publisher():
 
 class LaunchNodes:
     """Which nodes take part in the lockstep: the processes of the launch that started the simulator (its parent
-    roslaunch's descendants) and the master, but rosout, and of the simulator's own threads those that read
-    ``inbound`` topics (rospy names a subscription's threads after its topic)."""
+    roslaunch's descendants) and the master, but rosout, and the simulator's own threads but its loop's (those
+    that accept a new subscriber, and read what the graph sends it: a node that subscribes anew for each scan, as
+    ``rospy.wait_for_message`` does, is connected at the same instant every time)."""
 
-    def __init__(self, inbound):
+    def __init__(self):
         master = netenv.master_pid(rosgraph.get_master_uri())
-        self.inbound = set(inbound)
         self.participants = Participants(os.getppid(), extra=[master] if master else [],
-                                         exclude={self._pid('/rosout')} - {None}, own_threads=self._own_threads)
+                                         exclude={self._pid('/rosout')} - {None})
         self._known = {}
-
-    def _own_threads(self):
-        return {thread.native_id for thread in threading.enumerate() if thread.name in self.inbound}
 
     def has(self, caller_id):
         """True if node ``caller_id`` runs in one of the launch's processes (asked of it and the master once)."""
+        return self.pid(caller_id) is not None
+
+    def pid(self, caller_id):
+        """The pid of node ``caller_id`` if it runs in one of the launch's processes, else None."""
         if caller_id not in self._known:
-            self._known[caller_id] = self._pid(caller_id) in self.participants.pids()
+            pid = self._pid(caller_id)
+            self._known[caller_id] = pid if pid in self.participants.pids() else None
         return self._known[caller_id]
+
+    def receivers(self, publishers):
+        """The pids of the launch's processes that ``publishers`` (rospy Publishers) send to now."""
+        return {self.pid(c.endpoint_id) for p in publishers for c in list(p.impl.connections)} - {None}
 
     @staticmethod
     def _pid(caller_id):
@@ -129,6 +135,14 @@ def set_own_time(stamp):
     rospy.rostime._set_rostime(stamp)
 
 
+def _name(pid):
+    try:
+        with open('/proc/%d/comm' % pid) as f:
+            return f.read().strip()
+    except OSError:
+        return str(pid)
+
+
 def run(node):
     """The lockstep loop of :class:`closed_loop.nodes.sim_node.SimNode` ``node`` until shutdown."""
     s, sim = node.scheduling, node.sim
@@ -144,6 +158,7 @@ def run(node):
     missed = 0
     rospy.loginfo('sim_node: lockstep: each instant waits for the graph (at most %g s of wall time), commands '
                   'reach the wheels %d physics step%s later', s.lockstep_timeout, delay, '' if delay == 1 else 's')
+    pollers = None                        # found at the first instant, the graph idle since the start
     ahead = False                         # the clock of the coming step's sensor messages is out already
     try:
         while not node._stopped.is_set() and not rospy.is_shutdown():
@@ -153,6 +168,15 @@ def run(node):
             if node._paused:
                 time.sleep(PAUSED_POLL_S)
                 continue
+            if pollers is None:
+                pollers = gate.find_pollers()
+                if pollers:
+                    rospy.loginfo('sim_node: lockstep: %d thread%s of %s look%s again on their own every few ms of '
+                                  'wall time: %s waited for after what concerns %s' % (
+                                      len(pollers), '' if len(pollers) == 1 else 's',
+                                      ', '.join(sorted({_name(pid) for pid, _ in pollers})),
+                                      's' if len(pollers) == 1 else '', 'it is' if len(pollers) == 1 else 'they are',
+                                      'it' if len(pollers) == 1 else 'them'))
             k = int(round(sim.time_s / sim.dt_s))
             # The instant in whole nanoseconds from the step count (the float sum of steps drifts: 190 steps of
             # 0.01 s make 1.8999999999999997 s, and a timer due at 1.9 s would wait for the next step).
@@ -167,12 +191,12 @@ def run(node):
             gate.wait()                                # every node has the clock before the messages
             for port, messages in lines:
                 port.publish(messages)
-                gate.wait()
+                gate.wait(poll=node.launch_nodes.receivers(port.publishers[topic] for topic, _ in messages))
             heard = [(port, port.heard()) for port in node.ports]
             learning = k < learn_steps
             if learning or s.clock_every_step or k % second_steps in ticks:
                 node._publish_clock(stamp + AFTER)
-                gate.wait()
+                gate.wait(poll=EVERY)
                 after_clock = [(port, port.heard()) for port in node.ports]
                 if learning and any(command is not None for _, command in after_clock):
                     ticks.add(k % second_steps)
