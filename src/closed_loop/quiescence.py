@@ -42,8 +42,8 @@ QUIET_STATES = frozenset((b'S', b'T', b't', b'Z', b'X', b'I'))
 #: a poller (one that looks every 25 ms or more often: rospy's own loops look every 0.3 to 0.5 s, roscpp's every
 #: 0.1 s).
 POLLERS_WINDOW_S, POLLS_MIN = 0.1, 2
-#: A poller not seen to look again for this long (wall s) while all else is quiet is one no more (it had run for
-#: another reason while it was watched): it is not waited for again.
+#: A poller not seen to look again for this long (wall s) is one no more (it had run for another reason while it
+#: was watched, or what it waits for now wakes it): it is not waited for again.
 POLLER_GIVE_UP_S = 0.1
 #: ``wait(poll=EVERY)``: the pollers of every process.
 EVERY = object()
@@ -183,11 +183,12 @@ class Quiescence:
         excused = self.excused
         before = self._last
         check = True                       # whether the thread lists are to be checked
-        waiting, since = None, now         # {index: time slices} of the pollers yet to look again; since when
+        waiting = None                     # {index: time slices} of the pollers yet to look again
+        looked = {}                        # {index: wall time} each poller was last seen to look
         while True:
             if check and self._threads_changed():      # (a thread started or ended: list them again)
                 self._list_threads()
-                before, waiting = None, None
+                before, waiting, looked = None, None, {}
             check = False
             if before is None or len(before) != len(self._sched):
                 before = _reads(self._sched, 64)
@@ -195,14 +196,19 @@ class Quiescence:
                 waiting = self._pollers_of(poll, before)
             after = _reads(self._sched, 64)
             moved = self._moved(before, after)
+            t = self.clock()
+            for i in waiting:
+                if after[i] != before[i] or i not in looked:
+                    looked[i] = t
             if moved:
                 # Something ran: every poller awaited is to look again after it.
-                waiting, since = self._pollers_of(poll, after), self.clock()
+                waiting = self._pollers_of(poll, after)
             elif waiting:
                 waiting = {i: n for i, n in waiting.items() if _slices(after[i]) == n}
-                if waiting and self.clock() - since > POLLER_GIVE_UP_S:
-                    self.pollers -= {self._keys[i] for i in waiting}      # (it looks no more: not a poller)
-                    waiting = {}
+                gone = {i for i in waiting if t - looked.get(i, t) > POLLER_GIVE_UP_S}
+                if gone:                                      # (it looks no more: not a poller)
+                    self.pollers -= {self._keys[i] for i in gone}
+                    waiting = {i: n for i, n in waiting.items() if i not in gone}
             if not moved and not waiting and not excused:
                 # Nothing ran between the two readings: are all asleep now, and still nothing ran since?
                 states = _reads(self._stat, 48)

@@ -84,7 +84,9 @@ class StartSettings:
 class Verdict:
     """What the robot did. ``time_s``: when it came to rest or ended; ``final_pose``: ground truth (x, y, yaw)
     in the world frame; ``goal_error_m``: its distance to the goal (None without one); ``commands``: how many
-    commands the base was given; ``why``: one line."""
+    commands the base was given; ``missed_ticks``: a lockstepped graph's instants at which a node stayed busy
+    past the simulator's wait and the scenario went on without it (0 in process, and for a graph that missed
+    none); ``why``: one line."""
     outcome: str
     mode: Optional[str] = None
     time_s: float = 0.0
@@ -96,6 +98,7 @@ class Verdict:
     peak_decel_mps2: float = 0.0
     commands: int = 0
     why: str = ''
+    missed_ticks: int = 0
 
     def to_dict(self):
         """Plain values (JSON: an infinite clearance is null)."""

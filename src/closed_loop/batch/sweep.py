@@ -32,7 +32,7 @@ from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 
 RESULT_COLUMNS = ('outcome', 'mode', 'time_s', 'contacts', 'min_clearance_m', 'final_x', 'final_y', 'final_yaw',
-                  'goal_error_m', 'path_m', 'peak_decel_mps2', 'wall_s', 'error', 'why', 'logs')
+                  'goal_error_m', 'path_m', 'peak_decel_mps2', 'missed_ticks', 'wall_s', 'error', 'why', 'logs')
 _CACHE = {}     # per worker process: worlds and profiles loaded once
 #: Episodes handed to the cluster ahead of the results: this many per worker thread (at least WINDOW_MIN), the
 #: next one as each finishes, so that neither this process nor the scheduler holds a task per episode of a

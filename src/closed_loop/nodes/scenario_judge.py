@@ -1,4 +1,5 @@
 """scenario_judge: the judge (``closed_loop.batch.judge``) in a ROS graph, watching the simulator's ground truth."""
+import dataclasses
 import json
 import os
 import tempfile
@@ -25,8 +26,9 @@ class ScenarioJudge:
 
     Subscriptions: ``base_pose_ground_truth`` (nav_msgs/Odometry, frame world), ``contact_count``
     (std_msgs/UInt32), ``clearance`` (std_msgs/Float32), ``cmd_vel`` (geometry_msgs/Twist: what the base is
-    told), and ``mode`` (std_msgs/String, optional: remap it to the controller's ``~mode``; REACHED and
-    FAILED are honoured).
+    told), ``mode`` (std_msgs/String, optional: remap it to the controller's ``~mode``; REACHED and
+    FAILED are honoured), and ``missed_ticks`` (std_msgs/UInt32: a lockstepped simulator's count of instants it
+    went on without a node, scenario.launch's ``/sim/missed_ticks``; in the verdict).
     Publications: ``~verdict`` (std_msgs/String, latched): the verdict as JSON (outcome, mode, time_s,
     contacts, min_clearance_m, final_pose, goal_error_m, path_m, peak_decel_mps2, commands, why), once, when
     the scenario is over; the verdict's line is also logged.
@@ -53,6 +55,8 @@ class ScenarioJudge:
         rospy.Subscriber('clearance', Float32, self._on_clearance, queue_size=10)
         rospy.Subscriber('cmd_vel', Twist, self._on_command, queue_size=10)
         rospy.Subscriber('mode', String, self._on_mode, queue_size=10)
+        self.missed_ticks = 0
+        rospy.Subscriber('missed_ticks', UInt32, self._on_missed, queue_size=10)
         rospy.Subscriber('base_pose_ground_truth', Odometry, self._on_truth, queue_size=50)
         self.start = load_settings(StartSettings)
         if self.start.unpause:
@@ -78,6 +82,10 @@ class ScenarioJudge:
                 rospy.loginfo('first command: linear.x %.3f m/s, angular.z %.3f rad/s', msg.linear.x, msg.angular.z)
             self.judge.on_command((msg.linear.x, msg.angular.z))
 
+    def _on_missed(self, msg):
+        with self.lock:
+            self.missed_ticks = msg.data
+
     def _on_mode(self, msg):
         with self.lock:
             self.mode = msg.data
@@ -102,6 +110,10 @@ class ScenarioJudge:
     def _conclude(self, t, pose):
         self.done = True
         verdict = self.judge.verdict(t, pose)
+        if self.missed_ticks:
+            verdict = dataclasses.replace(verdict, missed_ticks=self.missed_ticks, why='%s; %d instant%s missed (a node '
+                                          'busy past the simulator\'s lockstep_timeout)' % (
+                                              verdict.why, self.missed_ticks, '' if self.missed_ticks == 1 else 's'))
         text = json.dumps(verdict.to_dict())
         if self.verdict_file:
             whole = dict(verdict.to_dict(), **self.judge.track_dict()) if self.judge.track is not None else None
