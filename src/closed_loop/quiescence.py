@@ -27,9 +27,9 @@ that does not answer) is quiet: it simply does not answer, the same way every ti
 Pollers: some threads do not wait to be woken but look again on their own, every so often of wall time:
 roscpp's timers and sleeps on simulated time check the clock every millisecond, and ``rospy.wait_for_message``
 checks for its message every 10 ms. Asleep between two looks, such a thread seems done while what it was given
-still waits for it. :meth:`Quiescence.find_pollers` finds them (threads that ran at least :data:`POLLS_MIN` times
-in a moment when nothing was sent), and ``wait(poll=...)`` is not over until each poller of the processes named
-has looked again since the wait began (then the graph is quiet as above).
+still waits for it. :meth:`Quiescence.find_pollers` finds them (threads that ran in a good share of the short bins
+of a moment when nothing was sent), and ``wait(poll=...)`` is not over until each poller of the processes named
+has looked again after the last thing any other thread did (then the graph is quiet as above).
 """
 import os
 import threading
@@ -38,10 +38,11 @@ import time
 #: States of a thread that is not working: asleep (S), stopped (T, t: SIGSTOP or a debugger), dead (Z, X), idle
 #: kernel thread (I). Running or runnable (R) and in uninterruptible sleep (D: I/O it asked for) are busy.
 QUIET_STATES = frozenset((b'S', b'T', b't', b'Z', b'X', b'I'))
-#: A thread that runs this many times in each half of :data:`POLLERS_WINDOW_S` of wall time while nothing is sent is
-#: a poller (one that looks every 25 ms or more often: rospy's own loops look every 0.3 to 0.5 s, roscpp's every
-#: 0.1 s).
-POLLERS_WINDOW_S, POLLS_MIN = 0.1, 2
+#: Pollers are found over POLLERS_WINDOW_S of wall time, in bins of POLLERS_BIN_S: a thread that ran in at least
+#: POLLERS_SHARE of the bins looks again every 16 ms or more often (roscpp's timers every 1 ms, wait_for_message every
+#: 10 ms); rospy's own loops look every 0.3 to 0.5 s, roscpp's every 0.1 s, a recorder looking for new topics every
+#: 50 ms: not pollers, and not waited for.
+POLLERS_WINDOW_S, POLLERS_BIN_S, POLLERS_SHARE = 0.1, 0.005, 0.3
 #: A poller not seen to look again for this long (wall s) is one no more (it had run for another reason while it
 #: was watched, or what it waits for now wakes it): it is not waited for again.
 POLLER_GIVE_UP_S = 0.1
@@ -157,17 +158,22 @@ class Quiescence:
         self._processes.clear()
 
     def find_pollers(self, window_s=POLLERS_WINDOW_S):
-        """Look at the participants for ``window_s`` of wall time, while nothing is sent to them, and keep as pollers
-        the threads that ran at least POLLS_MIN times in each half of it (a thread busy with something that ended
-        meanwhile is not one). Returns them, as (pid, tid)."""
+        """Look at the participants for ``window_s`` of wall time, while nothing is sent to them, in bins of
+        :data:`POLLERS_BIN_S`, and keep as pollers the threads that ran in at least :data:`POLLERS_SHARE` of the
+        bins (a thread that looks every 10 ms runs in about half of them; one busy with a burst of work that ends,
+        or one that looks every 50 ms, in a few). Returns them, as (pid, tid)."""
         self._refresh_processes()
         self._list_threads()
-        counts = []
-        for _ in range(3):
-            counts.append([_slices(x) for x in _reads(self._sched, 64)])
-            if len(counts) < 3:
-                time.sleep(0.5 * window_s)
-        self.pollers = {key for key, a, b, c in zip(self._keys, *counts) if b - a >= POLLS_MIN and c - b >= POLLS_MIN}
+        bins = max(2, int(round(window_s / POLLERS_BIN_S)))
+        active = [0] * len(self._keys)
+        before = _reads(self._sched, 64)
+        for _ in range(bins):
+            time.sleep(POLLERS_BIN_S)
+            after = _reads(self._sched, 64)
+            for i, (b, a) in enumerate(zip(before, after)):
+                active[i] += b != a and a != b''
+            before = after
+        self.pollers = {key for key, n in zip(self._keys, active) if n >= POLLERS_SHARE * bins}
         self._last = None
         return self.pollers
 
