@@ -43,6 +43,10 @@ QUIET_STATES = frozenset((b'S', b'T', b't', b'Z', b'X', b'I'))
 #: 10 ms); rospy's own loops look every 0.3 to 0.5 s, roscpp's every 0.1 s, a recorder looking for new topics every
 #: 50 ms: not pollers, and not waited for.
 POLLERS_WINDOW_S, POLLERS_BIN_S, POLLERS_SHARE = 0.1, 0.005, 0.3
+#: Pollers that ran in this share of the bins look every 1 or 2 ms: roscpp's timers and sleeps, watching the clock.
+#: They are waited for after a /clock (``wait(poll=EVERY)``), not after each message (``wait(poll=pids)``): what
+#: they watch is the clock, not the messages.
+CLOCK_POLLERS_SHARE = 0.9
 #: A poller not seen to look again for this long (wall s) is one no more (it had run for another reason while it
 #: was watched, or what it waits for now wakes it): it is not waited for again.
 POLLER_GIVE_UP_S = 0.1
@@ -150,6 +154,7 @@ class Quiescence:
         self._refreshed = -float('inf')
         self._last = None            # the counts at the end of the last wait
         self.pollers = set()         # (pid, tid) of the threads that look again on their own
+        self.clock_pollers = set()   # those of them that look every 1 or 2 ms (at the clock)
 
     def close(self):
         for fd in [fd for fds in self._threads.values() for fd in fds] + [fd for fd, _ in self._processes.values()]:
@@ -174,13 +179,15 @@ class Quiescence:
                 active[i] += b != a and a != b''
             before = after
         self.pollers = {key for key, n in zip(self._keys, active) if n >= POLLERS_SHARE * bins}
+        self.clock_pollers = {key for key, n in zip(self._keys, active) if n >= CLOCK_POLLERS_SHARE * bins}
         self._last = None
         return self.pollers
 
     def wait(self, poll=None):
         """True once quiet; False when ``timeout_s`` passed first (a miss: the busy processes are excused).
         ``poll``: the pids whose pollers must look again, after the last thing any other thread did, before it is
-        over (EVERY: every process's; None: none)."""
+        over (EVERY: every process's, after a clock; None: none; pids: after a message to them, their pollers but
+        those that watch the clock)."""
         now = self.clock()
         if now - self._refreshed >= self.refresh_s:
             self._refresh_processes()
@@ -249,11 +256,12 @@ class Quiescence:
         return any(b != a and key not in pollers for key, b, a in zip(self._keys, before, after))
 
     def _pollers_of(self, poll, counts):
-        """{index: time slices in ``counts``} of the pollers of ``poll``'s processes."""
+        """{index: time slices in ``counts``} of the pollers to await: every poller (``poll`` EVERY), or the pollers
+        of ``poll``'s processes but those that watch the clock."""
         if poll is None or not self.pollers or counts is None or len(counts) != len(self._keys):
             return {}
-        return {i: _slices(counts[i]) for i, key in enumerate(self._keys)
-                if key in self.pollers and (poll is EVERY or key[0] in poll)}
+        return {i: _slices(counts[i]) for i, key in enumerate(self._keys) if key in self.pollers and (
+            poll is EVERY or key[0] in poll and key not in self.clock_pollers)}
 
     def _busy(self, before, after, states):
         """The pids that ran between the two readings, or are not asleep."""

@@ -188,7 +188,9 @@ def run(node):
                       for name in schedule.due(sim.time_s)) if messages]
             if lines and not ahead and k > 0:          # (at t = 0 the clock reads 0 already)
                 node._publish_clock(stamp - BEFORE)
-            gate.wait()                                # every node has the clock before the messages
+                ahead = True
+            if ahead:
+                gate.wait()                            # every node has the clock before the messages
             for port, messages in lines:
                 port.publish(messages)
                 gate.wait(poll=node.launch_nodes.receivers(port.publishers[topic] for topic, _ in messages))
