@@ -222,23 +222,20 @@ class Quiescence:
                 if gone:                                      # (it looks no more: not a poller)
                     self.pollers -= {self._keys[i] for i in gone}
                     waiting = {i: n for i, n in waiting.items() if i not in gone}
-            if not moved and not waiting and not excused:
-                # Nothing ran between the two readings: are all asleep now, and still nothing ran since?
+            if not moved and not waiting:
+                # Nothing ran between the two readings (but pollers, and the excused): are all asleep now, and still
+                # nothing ran since?
                 states = _reads(self._stat, 48)
                 again = _reads(self._sched, 64)
-                if not self._moved(after, again) and all(_state(stat) in QUIET_STATES for stat in states):
+                if not self._moved(after, again) and self._asleep(states):
                     if not self._threads_changed():
+                        if excused:       # an excused process seen quiet is waited for again
+                            excused -= {pid for pid in excused if self._asleep(states, only=pid)
+                                        and not self._moved(after, again, only=pid)}
                         self._last = again
                         return True
                     check = True
                 after = again
-            elif excused and not waiting:
-                states = _reads(self._stat, 48)
-                busy = self._busy(before, after, states)
-                if not busy - excused and not self._threads_changed():
-                    excused &= busy               # an excused process seen quiet is waited for again
-                    self._last = after
-                    return True
             if self.clock() > deadline:
                 states = _reads(self._stat, 48)
                 self.missed += 1
@@ -248,20 +245,30 @@ class Quiescence:
             before = after
             os.sched_yield()
 
-    def _moved(self, before, after):
-        """True if a thread but a poller ran between the two readings (a poller runs every few ms anyway)."""
+    def _moved(self, before, after, only=None):
+        """True if a thread ran between the two readings: but a poller (it runs every few ms anyway) and a thread of
+        an excused process; ``only``: of process ``only`` (whatever it is)."""
         if before == after:
             return False
-        pollers = self.pollers
-        return any(b != a and key not in pollers for key, b, a in zip(self._keys, before, after))
+        if only is not None:
+            return any(b != a and key[0] == only for key, b, a in zip(self._keys, before, after))
+        pollers, excused = self.pollers, self.excused
+        return any(b != a and key not in pollers and key[0] not in excused
+                   for key, b, a in zip(self._keys, before, after))
+
+    def _asleep(self, states, only=None):
+        """True if every thread (of process ``only``; but those of excused processes) is asleep in ``states``."""
+        excused = self.excused
+        return all(_state(stat) in QUIET_STATES for key, stat in zip(self._keys, states)
+                   if (key[0] == only if only is not None else key[0] not in excused))
 
     def _pollers_of(self, poll, counts):
         """{index: time slices in ``counts``} of the pollers to await: every poller (``poll`` EVERY), or the pollers
         of ``poll``'s processes but those that watch the clock."""
         if poll is None or not self.pollers or counts is None or len(counts) != len(self._keys):
             return {}
-        return {i: _slices(counts[i]) for i, key in enumerate(self._keys) if key in self.pollers and (
-            poll is EVERY or key[0] in poll and key not in self.clock_pollers)}
+        return {i: _slices(counts[i]) for i, key in enumerate(self._keys) if key in self.pollers
+                and key[0] not in self.excused and (poll is EVERY or key[0] in poll and key not in self.clock_pollers)}
 
     def _busy(self, before, after, states):
         """The pids that ran between the two readings, or are not asleep."""
