@@ -55,15 +55,16 @@ EVERY = object()
 
 
 class Participants:
-    """The processes that take part: ``root_pid``'s descendants and ``extra`` pids but ``exclude`` ones, and the
-    calling process (``own_pid``) but its calling thread (``own_tid``)."""
+    """The processes that take part: ``root_pid``'s descendants and ``extra`` pids but ``exclude`` ones (a set, or
+    a callable that gives one, asked at each look-up), and the calling process (``own_pid``) but its calling thread
+    (``own_tid``)."""
 
     def __init__(self, root_pid, own_pid=None, own_tid=None, extra=(), exclude=()):
         self.root_pid = root_pid
         self.own_pid = os.getpid() if own_pid is None else own_pid
         self.own_tid = threading.get_native_id() if own_tid is None else own_tid
         self.extra = tuple(extra)
-        self.exclude = set(exclude)
+        self.exclude = exclude if callable(exclude) else frozenset(exclude)
 
     def pids(self):
         """The participants' pids now (the calling process among them; the root itself is not)."""
@@ -80,7 +81,7 @@ class Participants:
                     found.add(child)
                     todo.append(child)
         found.update(pid for pid in self.extra if os.path.exists('/proc/%d' % pid))
-        found -= self.exclude
+        found -= self.exclude() if callable(self.exclude) else self.exclude
         found.add(self.own_pid)
         return found
 
@@ -138,10 +139,12 @@ class Quiescence:
     """``wait()`` until the participants are quiet, or ``timeout_s`` of wall time; the count of misses is kept.
 
     ``participants``: a :class:`Participants`; ``refresh_s``: how often (wall s) the set of processes is
-    looked up again. Their threads are listed again whenever a process's count of threads changes."""
+    looked up again. Their threads are listed again whenever a process's count of threads changes. ``stopping``:
+    a callable, true once the waiting is to end (the graph shuts down): a wait then ends at once, not missed."""
 
-    def __init__(self, participants, timeout_s, refresh_s=0.5, clock=time.monotonic):
+    def __init__(self, participants, timeout_s, refresh_s=0.5, clock=time.monotonic, stopping=lambda: False):
         self.participants = participants
+        self.stopping = stopping
         self.timeout_s = timeout_s
         self.refresh_s = refresh_s
         self.clock = clock
@@ -236,6 +239,9 @@ class Quiescence:
                         return True
                     check = True
                 after = again
+            if self.stopping():
+                self._last = None
+                return True
             if self.clock() > deadline:
                 states = _reads(self._stat, 48)
                 self.missed += 1

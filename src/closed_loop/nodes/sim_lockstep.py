@@ -65,15 +65,24 @@ def missed_publisher():
 
 class LaunchNodes:
     """Which nodes take part in the lockstep: the processes of the launch that started the simulator (its parent
-    roslaunch's descendants) and the master, but rosout, and the simulator's own threads but its loop's (those
-    that accept a new subscriber, and read what the graph sends it: a node that subscribes anew for each scan, as
-    ``rospy.wait_for_message`` does, is connected at the same instant every time)."""
+    roslaunch's descendants) and the master, but rosout and the ``watchers`` (node names: rviz), and the simulator's
+    own threads but its loop's (those that accept a new subscriber, and read what the graph sends it: a node that
+    subscribes anew for each scan, as ``rospy.wait_for_message`` does, is connected at the same instant every
+    time)."""
 
-    def __init__(self):
+    def __init__(self, watchers=''):
         master = netenv.master_pid(rosgraph.get_master_uri())
-        self.participants = Participants(os.getppid(), extra=[master] if master else [],
-                                         exclude={self._pid('/rosout')} - {None})
+        self._left_out = {'/rosout': None}
+        self._left_out.update((rospy.resolve_name(name), None) for name in watchers.split())
+        self.participants = Participants(os.getppid(), extra=[master] if master else [], exclude=self.left_out)
         self._known = {}
+
+    def left_out(self):
+        """The pids of rosout and the watchers, each looked up until it is found."""
+        for name, pid in self._left_out.items():
+            if pid is None:
+                self._left_out[name] = self._pid(name)
+        return set(self._left_out.values()) - {None}
 
     def has(self, caller_id):
         """True if node ``caller_id`` runs in one of the launch's processes (asked of it and the master once)."""
@@ -83,7 +92,7 @@ class LaunchNodes:
         """The pid of node ``caller_id`` if it runs in one of the launch's processes, else None."""
         if caller_id not in self._known:
             pid = self._pid(caller_id)
-            self._known[caller_id] = pid if pid in self.participants.pids() else None
+            self._known[caller_id] = pid if pid in self.participants.pids() else None     # (watchers are not)
         return self._known[caller_id]
 
     def receivers(self, publishers):
@@ -152,7 +161,8 @@ def run(node):
     learn_steps, second_steps = int(round(LEARN_S / sim.dt_s)), int(round(1.0 / sim.dt_s))
     keep_own_time()
     missed_pub = node.missed_pub
-    gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout)
+    gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
+                      stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
     queued = collections.deque()          # (step, port, command), in the order heard
     ticks = set()                         # steps of a second (k mod second_steps) at which a command followed /clock
     missed = 0

@@ -124,7 +124,7 @@ class SimNode:
         starts = {spec.name: spec.start for spec in world.robots} or {'': world.robot_start}
         setups = [RobotSetup(setup.name, setup.settings, setup.urdf, starts[setup.name]) for setup in setups]
         self.sim = Simulation(world, self.settings, robots=setups)
-        self.launch_nodes = sim_lockstep.LaunchNodes() if self.scheduling.lockstep else None
+        self.launch_nodes = sim_lockstep.LaunchNodes(self.scheduling.lockstep_watchers) if self.scheduling.lockstep else None
         self.ports = [RobotPort(self, index, setup, SENSORS) for index, setup in enumerate(setups)]
         rospy.loginfo('sim_node: world %r from %s; %s; real_time_factor %g', world.name, path,
                       '; '.join(port.describe() for port in self.ports), self.scheduling.real_time_factor)

@@ -26,6 +26,9 @@ class SchedulingSettings:
     clock_every_step: bool = param(False, '', 'in lockstep, /clock goes out at every physics step; false: at every step '
                                    'with sensor messages, and at the others only if a node commanded at one in the '
                                    'first 2 s of simulated time (a timer off the sensors\' instants)')
+    lockstep_watchers: str = param('rviz', '', 'in lockstep, nodes of the launch that only watch, not waited for '
+                                   '(space-separated names, relative to the simulator\'s namespace): they get what '
+                                   'is published as any node outside the launch does')
     command_delay: float = param(0.01, 's', 'in lockstep, a command heard at an instant reaches the wheels this much '
                                  'simulated time later, in whole physics steps and at least one (an in-process '
                                  "episode's command_delay_s); in real time, commands act at the next step",
