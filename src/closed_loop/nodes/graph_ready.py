@@ -24,6 +24,8 @@ from closed_loop import netenv
 
 #: Wall time (s) a call to a node's API gets before it counts as not answering.
 CALL_TIMEOUT_S = 2.0
+#: How often the master is asked again while the graph comes up (wall s).
+POLL_S = 0.02
 
 
 #: Topics whose connections a scenario need not wait for: the nodes' log lines.
@@ -96,7 +98,7 @@ def start_when_ready(start):
     try:
         # First the simulator itself: once it serves unpause, every topic of its is registered, and the connections
         # to them are among those waited for below (a check made before would not know them).
-        rospy.wait_for_service(start.unpause, timeout=start.ready_timeout + 1.0)
+        _wait_for_service(master, rospy.resolve_name(start.unpause), deadline + 1.0)
     except rospy.ROSException as error:
         rospy.logerr('cannot start the simulation (%s): %s', start.unpause, error)
         return False
@@ -127,6 +129,20 @@ def start_when_ready(start):
     return True
 
 
+def _wait_for_service(master, service, deadline):
+    """Once ``service`` is registered (rospy.wait_for_service looks every 0.3 s: this, every POLL_S); raises
+    rospy.ROSException at ``deadline`` (wall clock)."""
+    while not rospy.is_shutdown():
+        try:
+            master.lookupService(service)
+            return
+        except (rosgraph.MasterError, OSError):
+            pass
+        if time.monotonic() >= deadline:
+            raise rospy.ROSException('%s is not served after %g s' % (service, deadline - time.monotonic()))
+        time.sleep(POLL_S)
+
+
 def _wait_for_publisher(master, topic, deadline):
     """The nodes that publish ``topic``, once there is one, or [] at ``deadline`` (wall clock)."""
     while not rospy.is_shutdown() and time.monotonic() < deadline:
@@ -136,7 +152,7 @@ def _wait_for_publisher(master, topic, deadline):
             publishers = []
         if publishers:
             return publishers
-        time.sleep(0.05)
+        time.sleep(POLL_S)
     return []
 
 
@@ -148,4 +164,4 @@ def _wait_for_connections(master, deadline, recorders=()):
         lacking = unrecorded(master, recorders) + missing(master, None, rospy.get_name())
         if not lacking or rospy.is_shutdown() or time.monotonic() >= deadline:
             return lacking
-        time.sleep(0.05)
+        time.sleep(POLL_S)
