@@ -59,7 +59,8 @@ def run_row(spec_fields, logs=None, choice='none'):
         row = {'outcome': r.outcome, 'mode': r.mode, 'time_s': r.time_s, 'contacts': r.contacts,
                'min_clearance_m': r.min_clearance_m, 'final_x': r.final_pose[0], 'final_y': r.final_pose[1],
                'final_yaw': r.final_pose[2], 'goal_error_m': r.goal_error_m, 'path_m': r.path_m,
-               'peak_decel_mps2': r.peak_decel_mps2, 'wall_s': r.wall_s, 'error': r.error or '', 'why': r.why,
+               'peak_decel_mps2': r.peak_decel_mps2, 'missed_ticks': r.missed_ticks, 'wall_s': r.wall_s,
+               'error': r.error or '', 'why': r.why,
                'logs': r.logs or ''}
         if spec.keep_trajectory:
             row['trajectory'] = r.trajectory
