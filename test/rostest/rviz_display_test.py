@@ -2,7 +2,8 @@
 """demo.launch rviz:=true in a real rviz on a virtual screen (Xvfb): once the robot has moved, a screenshot
 (read again each second, up to DRAW_WAIT_S, while rviz starts) shows the scan points (magenta, rviz/closed_loop.rviz), the robot model (its URDF blue) and the red box itself
 (world_markers, in the world frame that TF joins to odom) in the 3D view and a camera image that is not blank (the red box, outside the 3D view); the launch log has no error. avoid.launch rviz:=true: rviz
-subscribes to the navigator's ~window, ~plan and ~map, and draws the window's aim and the plan.
+subscribes to the navigator's ~window, ~plan and ~map, and draws the window's aim and the plan, on a graph in
+lockstep (rviz, a watcher, is not waited for: the simulator's ~lockstep_watchers).
 Skipped, with the reason, only where Xvfb cannot start."""
 import os
 import re
@@ -70,7 +71,7 @@ class RvizDisplay(unittest.TestCase):
         return rgb, text, log_path, topics
 
     def test_rviz_shows_the_navigators_plan(self):
-        # avoid.launch rviz:=true: the shipped config subscribes to the navigator's ~window, ~plan and ~map;
+        # avoid.launch rviz:=true lockstep:=true: the shipped config subscribes to the navigator's ~window, ~plan and ~map;
         # the window's aim (a purple sphere), the plan (a yellow path) and the map (lime-green cells) are drawn in the 3D view, colours
         # nothing else in the config uses.
         def missing(rgb):
@@ -88,7 +89,8 @@ class RvizDisplay(unittest.TestCase):
                     if int(mask.sum()) <= MIN_PIXELS]
 
         rgb, text, log_path, topics = self._screenshot(
-            'avoid_rviz', ['avoid.launch', 'world:=obstacle_left', 'camera:=false', 'rviz:=true'], missing,
+            'avoid_rviz', ['avoid.launch', 'world:=obstacle_left', 'camera:=false', 'rviz:=true', 'lockstep:=true'],
+            missing,
             moved_m=1.0)
         for topic in ('/avoid_obstacles/window', '/avoid_obstacles/plan', '/avoid_obstacles/map'):
             self.assertIn(topic, topics)

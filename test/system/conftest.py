@@ -215,3 +215,26 @@ def run_sweep(env, sweep_path, output, *extra, timeout_s=600):
     with open(os.path.join(str(output), 'rows.csv'), newline='') as f:
         rows = {int(row['index']): row for row in csv.DictReader(f)}
     return done, rows
+
+
+class busy:
+    """``with busy(2):`` two processes that only compute, at the test's own priority, for as long as the block runs
+    (a loaded machine, for the tests that say a result does not depend on the load)."""
+
+    def __init__(self, count):
+        self.count, self.processes = count, []
+
+    def __enter__(self):
+        self.processes = [subprocess.Popen([sys.executable, '-c', 'while True: pass']) for _ in range(self.count)]
+        return self
+
+    def __exit__(self, *_):
+        for process in self.processes:
+            process.kill()
+            process.wait()
+
+
+def same_rows(rows, again, columns=('outcome', 'time_s', 'final_x', 'final_y', 'missed_ticks')):
+    """The rows of two runs of one sweep that differ in ``columns``, by index: [] when every row is the same."""
+    return [(index, {c: (row[c], again[index][c]) for c in columns if row[c] != again[index][c]})
+            for index, row in sorted(rows.items()) if any(row[c] != again[index][c] for c in columns)]

@@ -14,7 +14,7 @@ import xml.etree.ElementTree as ET
 import pytest
 import rosbag
 
-from conftest import fixture_workspace, graph_leftovers, run_sweep
+from conftest import busy, fixture_workspace, graph_leftovers, run_sweep, same_rows
 
 ROSTEST_TIMEOUT_S = 300
 
@@ -104,12 +104,18 @@ def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fix
         assert os.path.isfile(os.path.join(row['logs'], 'graph.log')), row['logs']
         assert math.isfinite(float(row['wall_s']))
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
+    # In lockstep, the same rows beside two busy processes (the rospy node answers each scan; the C++ one on a
+    # ros::Timer of simulated time).
+    with busy(2):
+        done, loaded = run_sweep(fixture_env, sweep, tmp_path / 'loaded', '--workers', '2')
+    assert done.returncode == 0 and same_rows(rows, loaded) == [], (same_rows(rows, loaded), done.stdout[-2000:])
+    assert all(row['missed_ticks'] == '0' for row in loaded.values()), loaded
 
 
 def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_path):
     sweep = os.path.join(fixture_env['ROS_PACKAGE_PATH'].split(':')[0], 'fixture_controllers', 'sweeps', 'errors.yaml')
     done, rows = run_sweep(fixture_env, sweep, tmp_path / 'out', '--workers', '2')
-    assert done.returncode == 1 and 'episodes: 5, errors: 3' in done.stdout, done.stdout[-3000:]
+    assert done.returncode == 1 and 'episodes: 6, errors: 3' in done.stdout, done.stdout[-3000:]
     by_case = {r['controller']: r for r in rows.values()}
     missing = by_case['{"launch": "fixture_controllers/launch/nope.launch"}']
     assert missing['outcome'] == 'error', missing
@@ -130,4 +136,10 @@ def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_p
     with open(os.path.join(stubborn['logs'], 'graph.log')) as f:
         text = f.read()
     assert 'escalating to SIGTERM' in text and 'escalating to SIGKILL' in text, text[-2000:]
+    # The node that hangs is waited for once (2 s of wall time), then the scenario goes on without it: the base
+    # stops with no command, and the verdict counts the instant missed.
+    hung = by_case['{"launch": "fixture_controllers/launch/misbehaving.launch", "args": {"how": "hang"}}']
+    assert hung['outcome'] == 'stopped' and not hung['error'] and hung['missed_ticks'] == '1', hung
+    assert hung['why'].endswith("; 1 instant missed (a node busy past the simulator's lockstep_timeout)"), hung
+    assert 1.0 < float(hung['time_s']) < 5.0 and 0.1 < float(hung['final_x']) < 1.0, hung
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
