@@ -98,16 +98,17 @@ class ControllerNode(StopsOnShutdown):
         self._source = SourceCheck(rospy.resolve_name('scan'), frame_id(self.settings.scan_frame))
         self._watchdog = SilenceWatchdog(self.settings.scan_timeout, self.settings.watchdog_period_s,
                                          self._on_silence)
-        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1)
+        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=1, tcp_nodelay=True)
         if cls.uses_odom:
-            rospy.Subscriber('odom', Odometry, self._on_odom, queue_size=1)
+            rospy.Subscriber('odom', Odometry, self._on_odom, queue_size=1, tcp_nodelay=True)
         self._tf = None          # made at the first goal (listening to /tf costs every node's TF message)
         self._goal_msg = None     # (PoseStamped, when it came) of a goal not yet brought into odom
         if cls.uses_goal:
-            rospy.Subscriber('move_base_simple/goal', PoseStamped, self._on_goal, queue_size=1)
+            rospy.Subscriber('move_base_simple/goal', PoseStamped, self._on_goal, queue_size=1, tcp_nodelay=True)
         if cls.uses_camera:
-            rospy.Subscriber('camera/camera_info', CameraInfo, self._on_camera_info, queue_size=1)
-            rospy.Subscriber('red_centroid', PointStamped, self._on_red, queue_size=1)
+            rospy.Subscriber('camera/camera_info', CameraInfo, self._on_camera_info, queue_size=1,
+                             tcp_nodelay=True)
+            rospy.Subscriber('red_centroid', PointStamped, self._on_red, queue_size=1, tcp_nodelay=True)
         # reset=True: a ROS clock that jumps back (sim restart) restarts the timer instead of killing its thread.
         self._timer = rospy.Timer(rospy.Duration(1.0 / self.settings.rate_hz), lambda _e: self._tick(), reset=True)
         self._watchdog.start()

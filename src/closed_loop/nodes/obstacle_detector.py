@@ -48,7 +48,8 @@ class ObstacleDetector:
                              for name in SECTOR_CENTRES_RAD}
         # Sectors turn with the laser's mounting on the robot (robot_description), per scan frame.
         self._mounting = LaserMounting()
-        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=SCAN_QUEUE_SIZE)
+        self._scan_sub = rospy.Subscriber('scan', LaserScan, self._on_scan, queue_size=SCAN_QUEUE_SIZE,
+                                          tcp_nodelay=True)
         self._close = False   # an obstacle within warn_distance was reported and has not left
         # Live settings: each scan reads self._settings once; swapping the reference is atomic.
         self._live = LiveSettings(self._settings, self._take_settings)

@@ -51,13 +51,13 @@ class ScenarioJudge:
         self.mode = None
         self.done = False
         self.verdict_pub = Publisher('~verdict', String, queue_size=1, latch=True)
-        rospy.Subscriber('contact_count', UInt32, self._on_contacts, queue_size=10)
-        rospy.Subscriber('clearance', Float32, self._on_clearance, queue_size=10)
-        rospy.Subscriber('cmd_vel', Twist, self._on_command, queue_size=10)
-        rospy.Subscriber('mode', String, self._on_mode, queue_size=10)
+        rospy.Subscriber('contact_count', UInt32, self._on_contacts, queue_size=10, tcp_nodelay=True)
+        rospy.Subscriber('clearance', Float32, self._on_clearance, queue_size=10, tcp_nodelay=True)
+        rospy.Subscriber('cmd_vel', Twist, self._on_command, queue_size=10, tcp_nodelay=True)
+        rospy.Subscriber('mode', String, self._on_mode, queue_size=10, tcp_nodelay=True)
         self.missed_ticks = 0
-        rospy.Subscriber('missed_ticks', UInt32, self._on_missed, queue_size=10)
-        rospy.Subscriber('base_pose_ground_truth', Odometry, self._on_truth, queue_size=50)
+        rospy.Subscriber('missed_ticks', UInt32, self._on_missed, queue_size=10, tcp_nodelay=True)
+        rospy.Subscriber('base_pose_ground_truth', Odometry, self._on_truth, queue_size=50, tcp_nodelay=True)
         self.start = load_settings(StartSettings)
         if self.start.unpause:
             threading.Thread(target=graph_ready.start_when_ready, args=(self.start,), daemon=True).start()

@@ -56,7 +56,7 @@ class VisionNode(object):
         self._mask_pub = Publisher('~debug_mask', Image, queue_size=IMAGE_QUEUE_SIZE)
         self._image_sub = rospy.Subscriber('camera/image_raw', Image, self._on_image,
                                            queue_size=IMAGE_QUEUE_SIZE,
-                                           buff_size=IMAGE_BUFFER_BYTES)
+                                           buff_size=IMAGE_BUFFER_BYTES, tcp_nodelay=True)
 
     def _on_image(self, msg):
         """Decode ``msg``, detect red in it and publish the result; bad images publish nothing."""
