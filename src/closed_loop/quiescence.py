@@ -50,6 +50,8 @@ CLOCK_POLLERS_SHARE = 0.9
 #: A poller not seen to look again for this long (wall s) is one no more (it had run for another reason while it
 #: was watched, or what it waits for now wakes it): it is not waited for again.
 POLLER_GIVE_UP_S = 0.1
+#: A wait looks again at once (yielding the CPU) this many times, then naps NAP_S (wall s) between looks.
+SPIN_LOOKS, NAP_S = 30, 0.0002
 #: ``wait(poll=EVERY)``: the pollers of every process.
 EVERY = object()
 
@@ -199,17 +201,19 @@ class Quiescence:
         excused = self.excused
         before = self._last
         check = True                       # whether the thread lists are to be checked
-        waiting = None                     # {index: time slices} of the pollers yet to look again
+        waiting = {}                       # {index: time slices} of the pollers yet to look again
+        # The pollers' counts are to be taken at the next reading: at first (one made wholly after what the caller
+        # did, which a poller may find without being woken), and after anything ran.
+        fresh = True
         looked = {}                        # {index: wall time} each poller was last seen to look
+        looks = 0
         while True:
             if check and self._threads_changed():      # (a thread started or ended: list them again)
                 self._list_threads()
-                before, waiting, looked = None, None, {}
+                before, waiting, looked, fresh = None, {}, {}, True
             check = False
             if before is None or len(before) != len(self._sched):
                 before = _reads(self._sched, 64)
-            if waiting is None:
-                waiting = self._pollers_of(poll, before)
             after = _reads(self._sched, 64)
             moved = self._moved(before, after)
             t = self.clock()
@@ -217,15 +221,20 @@ class Quiescence:
                 if after[i] != before[i] or i not in looked:
                     looked[i] = t
             if moved:
-                # Something ran: every poller awaited is to look again after it.
+                # Something ran: every poller awaited is to look again after it, counted from the next reading, which
+                # begins once this one has seen it (what ran may have finished only as this reading went by: a
+                # poller read before it and run after it, but before it finished, saw none of it).
+                fresh = True
+            elif fresh:
                 waiting = self._pollers_of(poll, after)
+                fresh = False
             elif waiting:
                 waiting = {i: n for i, n in waiting.items() if _slices(after[i]) == n}
                 gone = {i for i in waiting if t - looked.get(i, t) > POLLER_GIVE_UP_S}
                 if gone:                                      # (it looks no more: not a poller)
                     self.pollers -= {self._keys[i] for i in gone}
                     waiting = {i: n for i, n in waiting.items() if i not in gone}
-            if not moved and not waiting:
+            if not moved and not fresh and not waiting:
                 # Nothing ran between the two readings (but pollers, and the excused): are all asleep now, and still
                 # nothing ran since?
                 states = _reads(self._stat, 48)
@@ -249,7 +258,13 @@ class Quiescence:
                 self._last = None
                 return False
             before = after
-            os.sched_yield()
+            # Look again at once for a little while (a node's answer takes some tens of microseconds), then nap:
+            # on a machine with more work than cores, a wait that spins takes the CPU from the nodes it waits for.
+            looks += 1
+            if looks < SPIN_LOOKS:
+                os.sched_yield()
+            else:
+                time.sleep(NAP_S)
 
     def _moved(self, before, after, only=None):
         """True if a thread ran between the two readings: but a poller (it runs every few ms anyway) and a thread of

@@ -1,0 +1,120 @@
+"""closed_loop.quiescence with real processes: a wait is over only once a child has done what it was sent (its
+answer is there the moment the wait returns), a child that looks for its work on its own every millisecond is
+found and waited for, one that stays busy is missed once and not waited for again, and a wait ends at once
+when told to stop."""
+import os
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from closed_loop.quiescence import EVERY, Participants, Quiescence
+
+if not os.path.exists('/proc/self/task/%d/schedstat' % os.getpid()):
+    pytest.skip('this kernel shows no schedstat', allow_module_level=True)
+
+#: Reads a line, computes for a few ms, answers it.
+ANSWERS = textwrap.dedent('''
+    import sys, time
+    for line in sys.stdin:
+        end = time.perf_counter() + 0.003
+        while time.perf_counter() < end:
+            pass
+        sys.stdout.write(line)
+        sys.stdout.flush()
+''')
+#: A thread that looks at a file every millisecond (as roscpp's timers look at the clock) and answers each new
+#: content; nothing wakes it.
+POLLS = textwrap.dedent('''
+    import sys, time
+    path, seen = sys.argv[1], ''
+    while True:
+        with open(path) as f:
+            now = f.read()
+        if now != seen:
+            seen = now
+            sys.stdout.write(now + '\\n')
+            sys.stdout.flush()
+        time.sleep(0.001)
+''')
+SPINS = 'while True:\n    pass\n'
+
+
+def child(code, *args):
+    return subprocess.Popen([sys.executable, '-c', code] + list(args), stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, universal_newlines=True, bufsize=1)
+
+
+def ready(process):
+    """What the child has written so far, without waiting for more."""
+    os.set_blocking(process.stdout.fileno(), False)
+    try:
+        return os.read(process.stdout.fileno(), 65536).decode()
+    except BlockingIOError:
+        return ''
+
+
+@pytest.fixture
+def gate():
+    made = []
+
+    def make(**kwargs):
+        made.append(Quiescence(Participants(os.getpid()), **kwargs))
+        return made[-1]
+    yield make
+    for g in made:
+        g.close()
+
+
+def test_a_wait_ends_only_once_the_child_has_answered(gate):
+    process = child(ANSWERS)
+    try:
+        g = gate(timeout_s=10.0)
+        g.wait()
+        for i in range(40):
+            process.stdin.write('%d\n' % i)
+            process.stdin.flush()
+            assert g.wait()
+            assert ready(process) == '%d\n' % i
+        assert g.missed == 0
+    finally:
+        process.kill()
+        process.wait()
+
+
+def test_a_thread_that_polls_is_found_and_waited_for(gate, tmp_path):
+    work = tmp_path / 'work'
+    work.write_text('0')
+    process = child(POLLS, str(work))
+    try:
+        deadline = time.monotonic() + 10
+        while ready(process) != '0\n':
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        g = gate(timeout_s=10.0)
+        assert {pid for pid, _ in g.find_pollers()} == {process.pid}
+        for i in range(1, 60):
+            work.write_text(str(i))        # (nothing is sent: the child finds it when it looks)
+            assert g.wait(poll=EVERY)
+            assert ready(process) == '%d\n' % i
+    finally:
+        process.kill()
+        process.wait()
+
+
+def test_a_busy_child_is_missed_once_then_not_waited_for_and_a_stop_ends_a_wait(gate):
+    process = child(SPINS)
+    try:
+        g = gate(timeout_s=0.3)
+        started = time.monotonic()
+        assert not g.wait()
+        assert g.missed == 1 and process.pid in g.excused and time.monotonic() - started >= 0.3
+        assert g.wait() and g.missed == 1
+        stopped = gate(timeout_s=60.0, stopping=lambda: True)
+        started = time.monotonic()
+        assert stopped.wait() and stopped.missed == 0 and time.monotonic() - started < 30
+    finally:
+        process.kill()
+        process.wait()
