@@ -1,8 +1,9 @@
 """A controller run as a graph in lockstep (its node beside the simulator node, two graphs at a time) gives the
 same result on an idle machine and on a loaded one, and the result of its core in process with the same command
-latency: stop_on_obstacle (its node runs on a 10 Hz timer of simulated time) at 0.3, 0.5 and 1.0 m/s, and with a
-command latency of 0.1 s; avoid_obstacles (it answers each scan) in obstacle_course, and to the same outcome in
-4 more worlds. The core's timer is given the phase a rospy.Timer has (its first tick one period after the start).
+latency: stop_on_obstacle (its node runs on a 10 Hz timer of simulated time) at 0.3 and 1.0 m/s, and with a
+command latency of 0.1 s; avoid_obstacles (it answers each scan) in obstacle_course (more worlds in
+test/bench/bench_graph.py). The core's timer is given the phase a rospy.Timer has (its first tick one period
+after the start).
 Each sweep's rows are written as the sweep writes them (repr of the floats), so "the same" is to the bit."""
 import math
 import os
@@ -10,11 +11,10 @@ import os
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 from conftest import busy, graph_leftovers, run_sweep, same_rows
 
-AVOID_WORLDS = ('obstacle_left', 'obstacle_right', 'slalom', 'dead_end')
 #: A rospy.Timer of 10 Hz first fires 0.1 s after the node starts (simulated time 0).
 TIMER_PHASE_S = 0.1
 STOP = ('name: stop\nbase: {world: wall, controller: {node: stop_on_obstacle}, time_limit_s: 30}\n'
-        'grid:\n  settings.cruise_speed: [0.3, 0.5, 1.0]\n  command_delay_s: [0.01, 0.1]\n')
+        'grid:\n  settings.cruise_speed: [0.3, 1.0]\n  command_delay_s: [0.01, 0.1]\n')
 AVOID = ('name: avoid\nbase: {world: obstacle_course, goal: [7.0, 0.0], controller: {node: avoid_obstacles}, '
          'time_limit_s: 40}\ngrid:\n  seed: [0]\n')
 
@@ -58,7 +58,7 @@ def test_stop_on_obstacle_is_the_same_loaded_or_not_and_its_cores_result_with_th
         rest[cruise, delay] = float(row['final_x'])
     # The latency is felt: with each command a tenth of a second later, the robot stops further on (it slowed
     # down first: by a few mm).
-    assert all(rest[cruise, 0.1] > rest[cruise, 0.01] + 0.001 for cruise in (0.3, 0.5, 1.0)), rest
+    assert all(rest[cruise, 0.1] > rest[cruise, 0.01] + 0.001 for cruise in (0.3, 1.0)), rest
 
 
 def test_avoid_obstacles_is_the_same_loaded_or_not_and_its_cores_result(tmp_path):
@@ -69,16 +69,3 @@ def test_avoid_obstacles_is_the_same_loaded_or_not_and_its_cores_result(tmp_path
     ok, why = agrees(row, core)
     assert ok and row['outcome'] == 'reached', why
 
-
-def test_avoid_obstacles_comes_to_its_cores_outcome_in_four_more_worlds(tmp_path):
-    sweep = tmp_path / 'worlds.yaml'
-    sweep.write_text('name: worlds\nbase: {controller: {node: avoid_obstacles}, time_limit_s: 40}\n'
-                     'grid:\n  world: [%s]\n' % ', '.join(AVOID_WORLDS))
-    done, rows = run_sweep(os.environ, sweep, tmp_path / 'out', '--workers', '2')
-    assert done.returncode == 0, done.stdout[-3000:]
-    assert sorted(r['world'] for r in rows.values()) == sorted(AVOID_WORLDS)
-    for row in rows.values():
-        core = core_of(world=row['world'], controller='avoid_obstacles', time_limit_s=40)
-        assert row['outcome'] == core.outcome, (row['world'], row['why'], core.why)
-        assert row['contacts'] == '0', row
-    assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
