@@ -180,8 +180,10 @@ class Quiescence:
         for _ in range(bins):
             time.sleep(POLLERS_BIN_S)
             after = _reads(self._sched, 64)
-            for i, (b, a) in enumerate(zip(before, after)):
-                active[i] += b != a and a != b''
+            states = _reads(self._stat, 48)
+            # (Runnable counts as looking: on a machine with more work than cores a poller waits for a CPU.)
+            for i, (b, a, state) in enumerate(zip(before, after, states)):
+                active[i] += b != a and a != b'' or _state(state) == b'R'
             before = after
         self.pollers = {key for key, n in zip(self._keys, active) if n >= POLLERS_SHARE * bins}
         self.clock_pollers = {key for key, n in zip(self._keys, active) if n >= CLOCK_POLLERS_SHARE * bins}
@@ -230,8 +232,11 @@ class Quiescence:
                 fresh = False
             elif waiting:
                 waiting = {i: n for i, n in waiting.items() if _slices(after[i]) == n}
-                gone = {i for i in waiting if t - looked.get(i, t) > POLLER_GIVE_UP_S}
-                if gone:                                      # (it looks no more: not a poller)
+                # A poller not seen to look for a while and asleep now looks no more (not a poller); one that is
+                # runnable waits for a CPU (a loaded machine), and is waited for.
+                gone = {i for i in waiting if t - looked.get(i, t) > POLLER_GIVE_UP_S
+                        and _state(_read(self._stat[i], 48)) in QUIET_STATES}
+                if gone:
                     self.pollers -= {self._keys[i] for i in gone}
                     waiting = {i: n for i, n in waiting.items() if i not in gone}
             if not moved and not fresh and not waiting:

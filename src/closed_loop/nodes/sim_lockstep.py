@@ -21,7 +21,11 @@ timer's tick, directly or through other nodes). From then on part 2 comes only a
 (part 1 moves the clock anyway, to 1 ns before each step with sensor messages), so a node's timer at 10 Hz costs
 ten of them a second, not a hundred. A timer that commanded nothing in that time, or one that starts later off
 those steps, fires at the next ``/clock`` instead, up to a sensor period late, the same way every time.
-``~clock_every_step`` keeps part 2 at every step.
+``~clock_every_step`` keeps part 2 at every step. At a learned step, part 2 also holds until the command of each
+robot whose timer commanded there has come (:func:`hold`, at most :data:`TICK_HOLD_S` of wall time; while
+learning, :data:`LEARN_HOLD_S` at every step): on a loaded machine a roscpp timer's command was seen to reach the
+simulator's socket about a millisecond after the graph looked quiet. A robot whose command stops coming there is
+no longer held for after :data:`SILENT_AFTER` such steps in a row, until it comes again.
 A node that stays busy past ``~lockstep_timeout`` of wall time makes the instant *missed*: the count goes out on
 ``~missed_ticks`` (std_msgs/UInt32, latched), and the base acts on the commands it has.
 
@@ -50,6 +54,10 @@ BEFORE = AFTER = rospy.Duration(0, 1)
 #: Simulated time (s) from the start in which /clock goes out at every step, and the steps of a second at which a
 #: command follows it are learned.
 LEARN_S = 2.0
+#: After a /clock at a timer's step, the simulator holds for its command (wall s; it ends when the command comes):
+#: while learning, at every step (so a step without a timer costs this much); after, at the learned steps, where a
+#: node's command stops coming SILENT_AFTER times in a row, it is no longer held for there until it comes again.
+LEARN_HOLD_S, TICK_HOLD_S, SILENT_AFTER, HOLD_POLL_S = 0.002, 0.05, 3, 0.0002
 #: Idle sleep while paused (s).
 PAUSED_POLL_S = 0.01
 #: Wall time (s) a look-up of a subscriber's process may take.
@@ -150,6 +158,29 @@ def set_own_time(stamp):
     rospy.rostime._set_rostime(stamp)
 
 
+def hold(node, gate, after_clock, wanted, hold_s):
+    """Hold until each port of ``wanted`` (indices into ``node.ports``) has a command in ``after_clock`` (what the
+    ports heard after a /clock), or for ``hold_s`` of wall time: a timer's command can reach the simulator's socket
+    a little after the graph was seen quiet (about a millisecond, measured on a loaded machine, in roscpp's chain
+    from /clock to its timer). What comes is put in ``after_clock``, and the graph waited for once more."""
+    missing = {i for i in wanted if after_clock[i][1] is None}
+    end = time.monotonic() + hold_s
+    came = False
+    while missing and time.monotonic() < end and not gate.stopping():
+        time.sleep(HOLD_POLL_S)
+        for i, port in enumerate(node.ports):
+            command = port.heard()
+            if command is not None:
+                after_clock[i], came = (port, command), True
+                missing.discard(i)
+    if came:
+        gate.wait(poll=EVERY)
+        for i, port in enumerate(node.ports):
+            command = port.heard()
+            if command is not None:
+                after_clock[i] = (port, command)
+
+
 def _name(pid):
     try:
         with open('/proc/%d/comm' % pid) as f:
@@ -170,7 +201,8 @@ def run(node):
     gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
                       stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
     queued = collections.deque()          # (step, port, command), in the order heard
-    ticks = set()                         # steps of a second (k mod second_steps) at which a command followed /clock
+    ticks = {}                            # step of a second (k mod second_steps) -> ports whose command followed /clock
+    strikes = collections.Counter()       # (step of a second, port): its holds in a row that ended with no command
     missed = 0
     rospy.loginfo('sim_node: lockstep: each instant waits for the graph (at most %g s of wall time), commands '
                   'reach the wheels %d physics step%s later', s.lockstep_timeout, delay, '' if delay == 1 else 's')
@@ -212,12 +244,21 @@ def run(node):
                 gate.wait(poll=node.launch_nodes.receivers(port.publishers[topic] for topic, _ in messages))
             heard = [(port, port.heard()) for port in node.ports]
             learning = k < learn_steps
-            if learning or s.clock_every_step or k % second_steps in ticks:
+            residue = k % second_steps
+            if learning or s.clock_every_step or residue in ticks:
                 node._publish_clock(stamp + AFTER)
                 gate.wait(poll=EVERY)
                 after_clock = [(port, port.heard()) for port in node.ports]
-                if learning and any(command is not None for _, command in after_clock):
-                    ticks.add(k % second_steps)
+                wanted = (set(range(len(node.ports))) if learning else
+                          {i for i in ticks.get(residue, ()) if strikes[residue, i] < SILENT_AFTER})
+                hold(node, gate, after_clock, wanted, LEARN_HOLD_S if learning else TICK_HOLD_S)
+                for i, (_, command) in enumerate(after_clock):
+                    if command is not None:
+                        strikes[residue, i] = 0
+                        if learning:
+                            ticks.setdefault(residue, set()).add(i)
+                    elif i in wanted and not learning:
+                        strikes[residue, i] += 1
                 heard += after_clock
             if k == learn_steps and not s.clock_every_step:
                 rospy.loginfo('sim_node: lockstep: /clock goes out with every sensor message and at %d of the %d '
