@@ -48,9 +48,11 @@ def test_echo_hz_and_a_bag_watch_a_lockstepped_scenario_and_change_nothing(rosco
     subprocess.run(['rosparam', 'set', '/use_sim_time', 'true'], env=env, check=True, timeout=30)
     bag = tmp_path / 'watched.bag'
     echo_out, hz_out = open(str(tmp_path / 'echo.txt'), 'w'), open(str(tmp_path / 'hz.txt'), 'w')
-    watchers = [subprocess.Popen(['rostopic', 'echo', '-n', '5', '/cmd_vel'], env=env, stdout=echo_out,
+    # (Read while they run: their output unbuffered, as in a terminal; into a file Python holds it in a buffer.)
+    shown = dict(env, PYTHONUNBUFFERED='1')
+    watchers = [subprocess.Popen(['rostopic', 'echo', '-n', '5', '/cmd_vel'], env=shown, stdout=echo_out,
                                  stderr=subprocess.STDOUT, start_new_session=True),
-                subprocess.Popen(['rostopic', 'hz', '/scan'], env=env, stdout=hz_out, stderr=subprocess.STDOUT,
+                subprocess.Popen(['rostopic', 'hz', '/scan'], env=shown, stdout=hz_out, stderr=subprocess.STDOUT,
                                  start_new_session=True),
                 subprocess.Popen(['rosbag', 'record', '-O', str(bag)] + list(WATCHED), env=env,
                                  stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT, start_new_session=True)]

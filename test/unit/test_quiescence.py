@@ -96,7 +96,8 @@ def test_a_thread_that_polls_is_found_and_waited_for(gate, tmp_path):
         g = gate(timeout_s=10.0)
         assert {pid for pid, _ in g.find_pollers()} == {process.pid}
         for i in range(1, 60):
-            work.write_text(str(i))        # (nothing is sent: the child finds it when it looks)
+            (tmp_path / 'next').write_text(str(i))
+            os.replace(str(tmp_path / 'next'), str(work))     # (nothing is sent: the child finds it when it looks)
             assert g.wait(poll=EVERY)
             assert ready(process) == '%d\n' % i
     finally:
