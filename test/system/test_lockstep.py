@@ -15,7 +15,7 @@ from conftest import roscore, stop, wait_for  # noqa: F401  (roscore: a fixture)
 
 #: Long enough that the watched run lasts a few seconds of wall time however fast lockstep goes: ``rostopic hz``
 #: prints once a wall second, and only once the messages it heard span a second since its last print.
-TIME_LIMIT_S = 40.0
+TIME_LIMIT_S = 25.0
 WATCHED = ('/scan', '/cmd_vel', '/clock')
 
 
