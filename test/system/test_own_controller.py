@@ -105,10 +105,16 @@ def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fix
         assert math.isfinite(float(row['wall_s']))
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
     # In lockstep, the same rows beside two busy processes (the rospy node answers each scan; the C++ one on a
-    # ros::Timer of simulated time).
+    # ros::Timer of simulated time): both controllers to the goal in front of the wall.
+    front = tmp_path / 'front.yaml'
+    with open(sweep) as f:
+        front.write_text(f.read().replace('goal: [[2.0, 1.0], [5.0, 0.0]]', 'goal: [[2.0, 1.0]]'))
     with busy(2):
-        done, loaded = run_sweep(fixture_env, sweep, tmp_path / 'loaded', '--workers', '2')
-    assert done.returncode == 0 and same_rows(rows, loaded) == [], (same_rows(rows, loaded), done.stdout[-2000:])
+        done, loaded = run_sweep(fixture_env, front, tmp_path / 'loaded', '--workers', '2')
+    idle = {(r['controller'], r['goal']): r for r in rows.values()}
+    loaded = {(r['controller'], r['goal']): r for r in loaded.values()}
+    same = same_rows({case: idle[case] for case in loaded}, loaded)
+    assert done.returncode == 0 and len(loaded) == 2 and same == [], (same, done.stdout[-2000:])
     assert all(row['missed_ticks'] == '0' for row in loaded.values()), loaded
 
 
