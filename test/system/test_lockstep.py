@@ -6,6 +6,7 @@ and ``rostopic hz`` reports the LIDAR's 10 Hz of simulated time."""
 import json
 import os
 import re
+import signal
 import subprocess
 
 import rosbag
@@ -60,6 +61,9 @@ def test_echo_hz_and_a_bag_watch_a_lockstepped_scenario_and_change_nothing(rosco
         wait_for(lambda: subscribed(env, WATCHED), 60, 'rostopic and rosbag subscribed')
         watched = scenario(env, tmp_path, 'watched')
         wait_for(lambda: re.search(r'average rate', (tmp_path / 'hz.txt').read_text()), 30, 'a rate from rostopic hz')
+        # Ctrl-C to the recorder: its wrapper exits at once, the recorder itself once it has closed the bag.
+        os.killpg(watchers[-1].pid, signal.SIGINT)
+        wait_for(bag.exists, 60, 'the bag closed')
     finally:
         for process in watchers:
             stop(process)

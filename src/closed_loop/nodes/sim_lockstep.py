@@ -21,11 +21,7 @@ timer's tick, directly or through other nodes). From then on part 2 comes only a
 (part 1 moves the clock anyway, to 1 ns before each step with sensor messages), so a node's timer at 10 Hz costs
 ten of them a second, not a hundred. A timer that commanded nothing in that time, or one that starts later off
 those steps, fires at the next ``/clock`` instead, up to a sensor period late, the same way every time.
-``~clock_every_step`` keeps part 2 at every step. At a learned step, part 2 also holds until the command of each
-robot whose timer commanded there has come (:func:`hold`, at most :data:`TICK_HOLD_S` of wall time; while
-learning, :data:`LEARN_HOLD_S` at every step): on a loaded machine a roscpp timer's command was seen to reach the
-simulator's socket about a millisecond after the graph looked quiet. A robot whose command stops coming there is
-no longer held for after :data:`SILENT_AFTER` such steps in a row, until it comes again.
+``~clock_every_step`` keeps part 2 at every step.
 A node that stays busy past ``~lockstep_timeout`` of wall time makes the instant *missed*: the count goes out on
 ``~missed_ticks`` (std_msgs/UInt32, latched), and the base acts on the commands it has.
 
@@ -54,9 +50,9 @@ BEFORE = AFTER = rospy.Duration(0, 1)
 #: Simulated time (s) from the start in which /clock goes out at every step, and the steps of a second at which a
 #: command follows it are learned.
 LEARN_S = 2.0
-#: After a /clock at a timer's step, the simulator holds for its command (wall s; it ends when the command comes):
-#: while learning, at every step (so a step without a timer costs this much); after, at the learned steps, where a
-#: node's command stops coming SILENT_AFTER times in a row, it is no longer held for there until it comes again.
+#: After a wave a controller answers (a sensor's messages, /clock at a timer's step), the simulator holds for its
+#: command (wall s; it ends when the command comes): while learning, after every wave (so a wave nobody answers
+#: costs LEARN_HOLD_S), after that after the learned ones (:class:`Answers`).
 LEARN_HOLD_S, TICK_HOLD_S, SILENT_AFTER, HOLD_POLL_S = 0.002, 0.05, 3, 0.0002
 #: Idle sleep while paused (s).
 PAUSED_POLL_S = 0.01
@@ -158,12 +154,40 @@ def set_own_time(stamp):
     rospy.rostime._set_rostime(stamp)
 
 
-def hold(node, gate, after_clock, wanted, hold_s):
-    """Hold until each port of ``wanted`` (indices into ``node.ports``) has a command in ``after_clock`` (what the
-    ports heard after a /clock), or for ``hold_s`` of wall time: a timer's command can reach the simulator's socket
-    a little after the graph was seen quiet (about a millisecond, measured on a loaded machine, in roscpp's chain
-    from /clock to its timer). What comes is put in ``after_clock``, and the graph waited for once more."""
-    missing = {i for i in wanted if after_clock[i][1] is None}
+class Answers:
+    """What the robots' controllers answer: the waves (a sensor line's messages of a robot, or /clock at a step of
+    a second) after which a robot's command came while learning. After learning, the simulator holds after such a
+    wave until that command has come (:func:`hold`), except for a robot whose command did not come there
+    :data:`SILENT_AFTER` times in a row (it fell silent), until it comes there again."""
+
+    def __init__(self, robots):
+        self.robots = robots
+        self.learned = {}                       # wave -> the robots (port indices) that answered it
+        self.strikes = collections.Counter()    # (wave, robot): holds in a row that ended with no command
+
+    def collect(self, node, gate, wave, learning):
+        """The commands ``node``'s ports heard after ``wave`` ([(port, command or None)]), held for as above
+        (while learning, for any robot, :data:`LEARN_HOLD_S`)."""
+        got = [(port, port.heard()) for port in node.ports]
+        wanted = (set(range(self.robots)) if learning else
+                  {i for i in self.learned.get(wave, ()) if self.strikes[wave, i] < SILENT_AFTER})
+        hold(node, gate, got, wanted, LEARN_HOLD_S if learning else TICK_HOLD_S)
+        for i, (_, command) in enumerate(got):
+            if command is not None:
+                self.strikes[wave, i] = 0
+                if learning:
+                    self.learned.setdefault(wave, set()).add(i)
+            elif i in wanted and not learning:
+                self.strikes[wave, i] += 1
+        return got
+
+
+def hold(node, gate, got, wanted, hold_s):
+    """Hold until each port of ``wanted`` (indices into ``node.ports``) has a command in ``got`` (what the ports
+    heard after a wave), or for ``hold_s`` of wall time: a command can reach the simulator's socket a little after
+    the graph was seen quiet (measured on a loaded machine: about a millisecond, from a roscpp timer and from a rospy
+    node that answers each scan). What comes is put in ``got``, and the graph waited for once more."""
+    missing = {i for i in wanted if got[i][1] is None}
     end = time.monotonic() + hold_s
     came = False
     while missing and time.monotonic() < end and not gate.stopping():
@@ -171,14 +195,14 @@ def hold(node, gate, after_clock, wanted, hold_s):
         for i, port in enumerate(node.ports):
             command = port.heard()
             if command is not None:
-                after_clock[i], came = (port, command), True
+                got[i], came = (port, command), True
                 missing.discard(i)
     if came:
         gate.wait(poll=EVERY)
         for i, port in enumerate(node.ports):
             command = port.heard()
             if command is not None:
-                after_clock[i] = (port, command)
+                got[i] = (port, command)
 
 
 def _name(pid):
@@ -201,8 +225,7 @@ def run(node):
     gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
                       stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
     queued = collections.deque()          # (step, port, command), in the order heard
-    ticks = {}                            # step of a second (k mod second_steps) -> ports whose command followed /clock
-    strikes = collections.Counter()       # (step of a second, port): its holds in a row that ended with no command
+    answers = Answers(len(node.ports))
     missed = 0
     rospy.loginfo('sim_node: lockstep: each instant waits for the graph (at most %g s of wall time), commands '
                   'reach the wheels %d physics step%s later', s.lockstep_timeout, delay, '' if delay == 1 else 's')
@@ -239,30 +262,22 @@ def run(node):
                 ahead = True
             if ahead:
                 gate.wait()                            # every node has the clock before the messages
+            learning = k < learn_steps
+            heard = [(port, port.heard()) for port in node.ports]
             for port, messages in lines:
                 port.publish(messages)
                 gate.wait(poll=node.launch_nodes.receivers(port.publishers[topic] for topic, _ in messages))
-            heard = [(port, port.heard()) for port in node.ports]
-            learning = k < learn_steps
-            residue = k % second_steps
-            if learning or s.clock_every_step or residue in ticks:
+                heard += answers.collect(node, gate, (node.ports.index(port),) + tuple(t for t, _ in messages),
+                                         learning)
+            residue = ('clock', k % second_steps)
+            if learning or s.clock_every_step or residue in answers.learned:
                 node._publish_clock(stamp + AFTER)
                 gate.wait(poll=EVERY)
-                after_clock = [(port, port.heard()) for port in node.ports]
-                wanted = (set(range(len(node.ports))) if learning else
-                          {i for i in ticks.get(residue, ()) if strikes[residue, i] < SILENT_AFTER})
-                hold(node, gate, after_clock, wanted, LEARN_HOLD_S if learning else TICK_HOLD_S)
-                for i, (_, command) in enumerate(after_clock):
-                    if command is not None:
-                        strikes[residue, i] = 0
-                        if learning:
-                            ticks.setdefault(residue, set()).add(i)
-                    elif i in wanted and not learning:
-                        strikes[residue, i] += 1
-                heard += after_clock
+                heard += answers.collect(node, gate, residue, learning)
             if k == learn_steps and not s.clock_every_step:
                 rospy.loginfo('sim_node: lockstep: /clock goes out with every sensor message and at %d of the %d '
-                              'steps of each second (where a timer commanded)', len(ticks), second_steps)
+                              'steps of each second (where a timer commanded)',
+                              sum(key[0] == 'clock' for key in answers.learned), second_steps)
             if gate.missed != missed:
                 missed = gate.missed
                 missed_pub.publish(UInt32(missed))
