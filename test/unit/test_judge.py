@@ -8,6 +8,7 @@ import pytest
 
 from closed_loop.batch import graph_episode
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare
+from closed_loop.batch.spec import parse_controller
 from closed_loop.batch.judge import Judge, JudgeSettings, Verdict
 from closed_loop.controllers import controller_classes
 from closed_loop.batch.judge import problems
@@ -123,7 +124,7 @@ def test_scenario_test_names_each_expectation_the_verdict_breaks():
 ])
 def test_a_graph_controller_that_cannot_be_run_is_refused_naming_the_field(controller, message):
     with pytest.raises(EpisodeError, match=r'controller') as caught:
-        graph_episode.parse_controller(controller, controller_classes())
+        parse_controller(controller, controller_classes())
     assert message in str(caught.value)
 
 

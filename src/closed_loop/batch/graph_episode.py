@@ -28,9 +28,8 @@ import yaml
 
 from closed_loop import launcher
 from closed_loop.batch import graph_keeper
-from closed_loop.batch.episode import EpisodeError, generated_world, judge_settings, result_from_verdict
+from closed_loop.batch.spec import EpisodeError, generated_world, judge_settings, result_from_verdict
 from closed_loop.batch.judge import Verdict, track_from_dict
-from closed_loop.yaml_check import quote
 
 #: Wall time (s) a graph gets to start, and its slack beyond the scenario's simulated time (in lockstep, the
 #: scenario's simulated time counts as wall time: a lockstepped graph slower than real time is waited for).
@@ -41,52 +40,12 @@ SHUTDOWN_S = graph_keeper.GRACE_S + 10.0
 KEEPER_PATH = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(graph_keeper.__file__))))
 #: How many lines of a log an error quotes.
 TAIL_LINES = 8
-CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest')
-PACKAGE = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
-ARG_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 DIED = re.compile(r'\[([^\]\s]+?)-\d+\] process has died \[pid \d+, exit code (-?\d+)')
 #: roslaunch's colours and terminal titles, which a quoted log line leaves out.
 ESCAPES = re.compile(r'\x1b\[[0-9;]*[A-Za-z]|\x1b\][^\x07]*\x07')
 CANNOT_LAUNCH = re.compile(r'ERROR: cannot launch node of type \[([^\]]+)\]: ([^\n]*)')
 #: One graph at a time in a process (a Dask worker runs one episode at a time; this holds it to that).
 _ONE_GRAPH = threading.Lock()
-
-
-def parse_controller(value, node_names):
-    """A graph controller from an episode's ``controller`` mapping: ``{launch: PKG/path.launch or /abs/path,
-    args: {NAME: VALUE}}`` or ``{node: NAME}`` (one of ``node_names``), with optional ``mode_topic`` (the
-    controller's mode, for the judge) and ``end_at_rest``; raises EpisodeError naming the field."""
-    unknown = sorted(set(value) - set(CONTROLLER_KEYS))
-    if unknown:
-        raise EpisodeError('controller.%s: expected one of %s' % (unknown[0], ', '.join(CONTROLLER_KEYS)))
-    if ('launch' in value) == ('node' in value):
-        raise EpisodeError('controller: expected a launch file (launch: PKG/path.launch) or a node of this package '
-                           '(node: NAME), one of them, got %s' % (quote(value),))
-    if 'node' in value and value['node'] not in node_names:
-        raise EpisodeError('controller.node: expected one of %s, got %s' % (', '.join(sorted(node_names)), quote(value['node'])))
-    if 'launch' in value:
-        launch = value['launch']
-        if not isinstance(launch, str) or not launch.endswith(('.launch', '.xml')):
-            raise EpisodeError('controller.launch: expected PKG/path/file.launch or an absolute path, got %s' % (quote(launch),))
-        if '$(' in launch:
-            raise EpisodeError('controller.launch: %r has "$(" in it, which roslaunch would take for a substitution'
-                               % (launch,))
-        parts = launch.split('/')
-        if not os.path.isabs(launch) and (not PACKAGE.match(parts[0]) or len(parts) < 2 or '..' in parts):
-            raise EpisodeError('controller.launch: expected PKG/path/file.launch (a package name, then a path in '
-                               'it) or an absolute path, got %s' % (quote(launch),))
-    args = value.get('args') or {}
-    if not isinstance(args, dict) or 'node' in value and args:
-        raise EpisodeError('controller.args: expected a mapping of a launch file\'s args, got %s' % (quote(args),))
-    for name, arg in args.items():
-        if not isinstance(name, str) or not ARG_NAME.match(name):
-            raise EpisodeError('controller.args: %s is not an arg name' % (quote(name),))
-        if not isinstance(arg, (str, int, float, bool)) or '$(' in str(arg):
-            raise EpisodeError('controller.args.%s: expected a string, number or boolean (no $(...) substitution), '
-                               'got %s' % (name, quote(arg)))
-    if not isinstance(value.get('mode_topic', ''), str) or not isinstance(value.get('end_at_rest', True), bool):
-        raise EpisodeError('controller: mode_topic is a topic name and end_at_rest true or false')
-    return value
 
 
 def _launch_path(launch):

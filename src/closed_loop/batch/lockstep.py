@@ -24,7 +24,7 @@ import time
 import cv2
 import numpy
 
-from closed_loop.batch.episode import judge_settings, result_from_verdict
+from closed_loop.batch.spec import judge_settings, result_from_verdict
 from closed_loop.batch.judge import Judge
 from closed_loop.commands import validate_command
 from closed_loop.control.scan import Scan
