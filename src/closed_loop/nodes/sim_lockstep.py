@@ -43,13 +43,10 @@ from std_msgs.msg import UInt32
 from closed_loop import netenv
 from closed_loop.nodes.common import Publisher
 from closed_loop.quiescence import EVERY, Participants, Quiescence
-from closed_loop.sim.scheduler import command_delay_steps
+from closed_loop.sim.scheduler import LEARN_S, command_delay_steps
 
 #: The clock of a step's sensor messages, and of its timers: this much before and after the step's instant.
 BEFORE = AFTER = rospy.Duration(0, 1)
-#: Simulated time (s) from the start in which /clock goes out at every step, and the steps of a second at which a
-#: command follows it are learned.
-LEARN_S = 2.0
 #: After a wave a controller answers (a sensor's messages, /clock at a timer's step), the simulator holds for its
 #: command (wall s; it ends when the command comes): while learning, after every wave (so a wave nobody answers
 #: costs LEARN_HOLD_S), after that after the learned ones (:class:`Answers`).

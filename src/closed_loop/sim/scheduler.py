@@ -4,6 +4,11 @@ from dataclasses import dataclass
 
 from closed_loop.settings import param
 
+#: In lockstep, the simulated time (s) from the start in which /clock goes out at every step and the simulator learns
+#: at which steps of a second a command follows it, and what each controller answers (closed_loop.nodes.sim_lockstep):
+#: a second of a timer's ticks, for one started in the first 0.2 s.
+LEARN_S = 1.2
+
 
 @dataclass
 class SchedulingSettings:
@@ -25,7 +30,7 @@ class SchedulingSettings:
                                     minimum=0.01, maximum=60.0)
     clock_every_step: bool = param(False, '', 'in lockstep, /clock goes out at every physics step; false: at every step '
                                    'with sensor messages, and at the others only if a node commanded at one in the '
-                                   'first 2 s of simulated time (a timer off the sensors\' instants)')
+                                   'first %g s of simulated time (a timer off the sensors\' instants)' % LEARN_S)
     lockstep_watchers: str = param('rviz', '', 'in lockstep, nodes of the launch that only watch, not waited for '
                                    '(space-separated names, relative to the simulator\'s namespace): they get what '
                                    'is published as any node outside the launch does')
