@@ -101,6 +101,27 @@ BESIDE_NICENESS = 19
 GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreement', 'test_failure_report')
 
 
+def call(cmd, out, timeout=None, **kwargs):
+    """Run ``cmd`` with its output to ``out``; returns (exit status or 'timeout', CPU seconds it and the descendants it
+    waited for used), killed after ``timeout`` s if given."""
+    process = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, **kwargs)
+    killed = threading.Event()
+
+    def kill():
+        killed.set()
+        process.kill()
+    timer = threading.Timer(timeout, kill) if timeout else None
+    if timer:
+        timer.start()
+    try:
+        _, status, usage = os.wait4(process.pid, 0)
+    finally:
+        if timer:
+            timer.cancel()
+    process.returncode = os.waitstatus_to_exitcode(status)
+    return 'timeout' if killed.is_set() else process.returncode, usage.ru_utime + usage.ru_stime
+
+
 def lower_priority(niceness):
     """A preexec_fn that runs a child (and so all its descendants) at ``niceness``; None for the normal one."""
     return (lambda: os.nice(niceness)) if niceness else None
@@ -118,11 +139,7 @@ def run_rostest_file(path, results_dir, niceness=0):
     cmd = ['rostest', '--results-base-dir', file_results, 'closed_loop', os.path.basename(path)]
     started = time.monotonic()
     with open(log, 'w') as out:
-        try:
-            code = subprocess.call(cmd, stdout=out, stderr=subprocess.STDOUT, env=env, cwd=ROOT,
-                                   timeout=ROSTEST_HANG_LIMIT_S, preexec_fn=lower_priority(niceness))
-        except subprocess.TimeoutExpired:
-            code = 'timeout'
+        code, cpu_s = call(cmd, out, ROSTEST_HANG_LIMIT_S, env=env, cwd=ROOT, preexec_fn=lower_priority(niceness))
     p = f = 0
     s, names = [], []
     # rosunit-<test-name>.xml: one testcase per test method (hztest, our unittest nodes).
@@ -140,7 +157,8 @@ def run_rostest_file(path, results_dir, niceness=0):
         f, names = f + 1, names + ['%s (rostest exit %s, see %s)' % (name, code, log)]
     if p + f == 0:
         f, names = 1, ['%s (no test ran, see %s)' % (name, log)]
-    text = '== rostest %s ... %d passed, %d failed%s (%.0f s)' % (name, p, f, skip_note(s), time.monotonic() - started)
+    text = '== rostest %s ... %d passed, %d failed%s (%.0f s, %.0f CPU-s)' % (name, p, f, skip_note(s),
+                                                                           time.monotonic() - started, cpu_s)
     if f:
         with open(log) as out:
             text += '\n   --- tail of %s ---\n%s' % (log, out.read()[-3000:])
@@ -155,13 +173,13 @@ def run_pytest(path, results_dir, select=None, niceness=0):
     log = os.path.join(results_dir, name + '.log')
     started = time.monotonic()
     with open(log, 'w') as out:
-        code = subprocess.call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider',
-                                '--junitxml', xml] + (['-k', select] if select else []),
-                               stdout=out, stderr=subprocess.STDOUT, cwd=ROOT, preexec_fn=lower_priority(niceness))
+        code, cpu_s = call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider', '--junitxml', xml]
+                           + (['-k', select] if select else []), out, cwd=ROOT, preexec_fn=lower_priority(niceness))
     p, f, s, names = count_junit(xml) if os.path.exists(xml) else (0, 0, [], [])
     if code not in (0, 5) and f == 0:
         f, names = 1, ['%s (pytest exit %d, see %s)' % (name, code, log)]
-    text = '== pytest %s ... %d passed, %d failed%s (%.0f s)' % (name, p, f, skip_note(s), time.monotonic() - started)
+    text = '== pytest %s ... %d passed, %d failed%s (%.0f s, %.0f CPU-s)' % (name, p, f, skip_note(s),
+                                                                          time.monotonic() - started, cpu_s)
     if f:
         with open(log) as out:
             text += '\n   --- tail of %s ---\n%s' % (log, out.read()[-3000:])
