@@ -95,9 +95,9 @@ def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fix
     # The clock from the first scan on, with no gap longer than between two scans: the simulator sends every
     # step's clock at real time, and after a stall of its own (a loaded machine) at least the one before a scan.
     gaps = [(a, b) for a, b in zip(clock, clock[1:]) if b - a > 0.201]
-    assert clock[0] <= 0.2 and clock[-1] >= 30.0 and clock == sorted(clock) and not gaps, (clock[:3], clock[-3:], gaps)
+    assert clock[0] <= 0.2 and clock[-1] >= 15.0 and clock == sorted(clock) and not gaps, (clock[:3], clock[-3:], gaps)
     assert scans[0] <= 0.2 and all(abs(b - a - 0.2) < 1e-6 for a, b in zip(scans[1:], scans[2:])), scans[:5]
-    assert len(scans) >= 150 and commands > 100, (len(scans), commands)
+    assert len(scans) >= 75 and commands > 50, (len(scans), commands)
     for row in rows.values():
         assert not row['error'] and row['why'].startswith(row['outcome']), row
         assert os.path.isfile(os.path.join(row['logs'], 'verdict.json')), row['logs']

@@ -229,7 +229,7 @@ def test_a_full_disk_is_one_line_with_the_room_needed_and_the_rows_stay_whole_fo
 
 def test_an_interrupted_sweep_keeps_its_rows_and_resumes_where_it_stopped(tmp_path):
     spec = tmp_path / 'longer.yaml'
-    spec.write_text(TINY.replace('seed: [0, 1]', 'seed: [0, 1, 2, 3, 4, 5]'))
+    spec.write_text(TINY.replace('seed: [0, 1]', 'seed: [0, 1, 2]'))
     out = tmp_path / 'out'
     env = dict(os.environ, PYTHONPATH=os.path.join(ROOT, 'src') + os.pathsep + os.environ.get('PYTHONPATH', ''))
     p = subprocess.Popen([sys.executable, '-m', 'closed_loop.batch.sweep', str(spec), '--output', str(out),
@@ -242,9 +242,9 @@ def test_an_interrupted_sweep_keeps_its_rows_and_resumes_where_it_stopped(tmp_pa
     assert p.returncode == 130, err
     assert '--resume' in err
     kept = rows_of(out / 'rows.csv')
-    assert 3 <= len(kept) < 24
+    assert 3 <= len(kept) < 12
     assert sweep.main([str(spec), '--output', str(out)]) == 2                   # not over it without --resume
     assert sweep.main([str(spec), '--output', str(out), '--resume', '--workers', '2']) == 0
     rows = rows_of(out / 'rows.csv')
-    assert len(rows) == 24 and len({r['spec'] for r in rows}) == 24
+    assert len(rows) == 12 and len({r['spec'] for r in rows}) == 12
     assert [r['spec'] for r in rows[:len(kept)]] == [r['spec'] for r in kept]
