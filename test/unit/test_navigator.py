@@ -254,6 +254,31 @@ def test_no_progress_recovers_then_fails():
     assert transitions[-1][0] is NavState.FAILED and transitions[-1][1] == pytest.approx(10.0, abs=0.11)
 
 
+def test_its_timeouts_fall_at_the_same_tick_on_any_hosts_clock():
+    # The same decisions on the clocks the two hosts have: an in-process runner's sums of 0.1 s (float error: ten of
+    # them make 0.9999999999999999), and a ROS node's whole nanoseconds, 1 ns after each tick in a timer and 1 ns
+    # before it in a callback. Without a tolerance, recovery began a tick apart (dead_end: 2.65 m apart at the end).
+    wall = scan_of(segments=[((0.45, -3.0), (0.45, 3.0))])
+
+    def ticks(clock):
+        transitions = []
+        nav = Navigator(NavigatorSettings(stuck_timeout=2.0, give_up_timeout=10.0), (0.0, 0.0, 0.0),
+                        goal_xy=(10.0, 0.0), on_transition=lambda old, new, t, why: transitions.append(new))
+        for i in range(120):
+            before = len(transitions)
+            nav.update(clock(i), (0.0, 0.0, 0.0), 0.0, 0.0, wall, LASER, FOOTPRINT)
+            transitions[before:] = [(i, new) for new in transitions[before:]]
+        return transitions
+    summed = [0.0]
+    for _ in range(120):
+        summed.append(summed[-1] + 0.1)
+    clocks = [lambda i: i * 0.1, lambda i: summed[i], lambda i: round(i * 0.1, 9) + 1e-9,
+              lambda i: round(i * 0.1, 9) - 1e-9 * (i > 0)]
+    found = [ticks(clock) for clock in clocks]
+    assert NavState.RECOVERING in [new for _, new in found[0]] and found[0][-1][1] is NavState.FAILED, found[0]
+    assert all(other == found[0] for other in found[1:]), found
+
+
 def test_where_it_was_stuck_is_closed_to_the_way_for_a_while():
     # Between two walls 1.6 m apart the way runs straight ahead; a robot that makes no progress there (held
     # in place) closes the place just ahead, and the way then leads round it, until the closure lapses.

@@ -14,6 +14,7 @@ import cv2
 import numpy
 
 from closed_loop.control.clearance_field import outline
+from closed_loop.control.loop import lasted, outlasted
 
 #: Plan an escape once the robot has made no progress for this long (s), and again this long (s) after a plan
 #: ends, is dropped or none was found.
@@ -202,7 +203,8 @@ class Escape:
 
     def due(self, now_s, stalled_s):
         """True while a plan is followed, or once one is to be asked for."""
-        return self.active or (stalled_s >= ESCAPE_AFTER_S and (self.next_try_s is None or now_s >= self.next_try_s))
+        return self.active or (lasted(stalled_s, ESCAPE_AFTER_S) and (self.next_try_s is None or
+                                                                      lasted(now_s - self.next_try_s, 0.0)))
 
     def command(self, now_s, pose, points, target, footprint, margin_m, check, horizon_s,
                 limits=(SPEED_MPS, MAX_TURN_RADPS)):
@@ -234,7 +236,7 @@ class Escape:
                 break
             self.follower.index += 1      # near enough the turn's heading: go on with the next move
         self.blocked_s = now_s if self.blocked_s is None else self.blocked_s
-        if now_s - self.blocked_s > BLOCKED_S:
+        if outlasted(now_s - self.blocked_s, BLOCKED_S):
             self.follower, self.next_try_s = None, now_s + RETRY_S
             return None
         return 0.0, 0.0, 'escape: the plan\'s next move does not keep the margin: waiting'

@@ -18,6 +18,7 @@ import enum
 import time
 
 from closed_loop.control.fusion import Belief, associate, belief, fresh_detection, in_path
+from closed_loop.control.loop import lasted
 from closed_loop.control.navigator import Navigator, NavState
 from closed_loop.control.tracking import Tracker, clusters
 
@@ -121,7 +122,7 @@ class FusionNavigator:
             if self._clear_since is None:
                 self._clear_since = now_s
             clear_s = now_s - self._clear_since
-            if clear_s < self.wait_settings.hold_s:
+            if not lasted(clear_s, self.wait_settings.hold_s):
                 return FusionStep(FusionState.WAITING, 0.0, 0.0, 'path clear for %.1f s (hold_s %.1f s)'
                                   % (clear_s, self.wait_settings.hold_s), None, self.opinions)
             self.waiting = False

@@ -8,6 +8,21 @@ from closed_loop.settings import MIN_RATE_HZ, param
 
 #: Scans older than this are never acted on, whatever ``~scan_timeout`` says.
 MAX_SCAN_TIMEOUT_S = 5.0
+#: A time compared with a threshold counts as there within this much (s): a ROS host's clock is whole nanoseconds,
+#: 1 ns either side of an instant (a callback's before it, a timer's after), and an in-process host's sums of steps
+#: carry float error (0.1 s ten times is 0.9999999999999999 s), so without it one decision can fall a tick apart
+#: between the two hosts.
+TIME_TOLERANCE_S = 1e-6
+
+
+def lasted(elapsed_s, limit_s):
+    """True once ``elapsed_s`` has reached ``limit_s`` (within :data:`TIME_TOLERANCE_S`)."""
+    return elapsed_s >= limit_s - TIME_TOLERANCE_S
+
+
+def outlasted(elapsed_s, limit_s):
+    """True once ``elapsed_s`` is past ``limit_s`` (by more than :data:`TIME_TOLERANCE_S`)."""
+    return elapsed_s > limit_s + TIME_TOLERANCE_S
 
 
 @dataclasses.dataclass

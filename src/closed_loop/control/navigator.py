@@ -21,7 +21,7 @@ from closed_loop.control.local_planner import (PREDICTION_STEP_S, check_finite, 
 from closed_loop.control.move_check import MoveCheck
 from closed_loop.control.scan_memory import ScanMemory, blind_points, from_frame, to_frame
 from closed_loop.control.trail import TRAIL_LOOKBACK_M, TRAIL_STEP_M, Trail, back_toward, rear_seen
-from closed_loop.control.loop import LoopSettings
+from closed_loop.control.loop import LoopSettings, lasted
 from closed_loop.settings import SettingsError, param
 
 
@@ -246,7 +246,7 @@ class Navigator:
             self._best = progress if self._best is None else max(progress, self._best)
             self._progress_s = self._stuck_from_s = now_s
         stalled = now_s - self._progress_s
-        if stalled >= s.give_up_timeout:
+        if lasted(stalled, s.give_up_timeout):
             self._enter(NavState.FAILED, now_s, 'no progress for %.1f s (give_up_timeout)' % stalled)
             return Step(self.state, 0.0, 0.0, 'failed')
         if self.state is not NavState.RECOVERING:
@@ -255,7 +255,7 @@ class Navigator:
             step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
             if step is not None:
                 return step
-        elif now_s - self._stuck_from_s >= s.stuck_timeout and not self._escape.active:
+        elif lasted(now_s - self._stuck_from_s, s.stuck_timeout) and not self._escape.active:
             self._recovery = {'started_s': now_s, 'side': self._side, 'turn_s': None, 'from': pose[:2],
                               'end': self._trail.back(BACKOUT_M) if len(self._trail) > 1 else None}
             self._way = None
@@ -358,10 +358,10 @@ class Navigator:
         turn = r['side'] * RECOVERY_TURN_RADPS
         if r['turn_s'] is None:
             end = r['end']
-            if elapsed < BACKUP_S and rear_seen(scan, laser_pose):
+            if not lasted(elapsed, BACKUP_S) and rear_seen(scan, laser_pose):
                 if safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
                     return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
-            elif elapsed < BACKOUT_S and math.hypot(r['from'][0] - pose[0], r['from'][1] - pose[1]) < BACKOUT_M \
+            elif not lasted(elapsed, BACKOUT_S) and math.hypot(r['from'][0] - pose[0], r['from'][1] - pose[1]) < BACKOUT_M \
                     and not safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S)):
                 # No room to turn: back out the way it came, or else straight back or on a backing arc.
                 moves = [(-BACKUP_SPEED_MPS, 0.0, 'backing straight out')] + [
@@ -375,7 +375,7 @@ class Navigator:
                     if safe(v, w, BACKUP_S):
                         return Step(NavState.RECOVERING, v, w, what + ': no room to turn here')
             r['turn_s'] = now_s
-        if now_s - r['turn_s'] < RECOVERY_TURN_S and safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S -
+        if not lasted(now_s - r['turn_s'], RECOVERY_TURN_S) and safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S -
                                                                               (now_s - r['turn_s']))):
             return Step(NavState.RECOVERING, 0.0, turn, 'turning to try the other side')
         self._recovery = None

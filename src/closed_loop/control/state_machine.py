@@ -11,11 +11,8 @@ import numbers
 from typing import Callable, Optional, Tuple
 
 from closed_loop.control.decisions import FrontControlSettings
+from closed_loop.control.loop import lasted
 from closed_loop.settings import SettingsError, param
-
-# Timestamps are float seconds: a difference meant to equal backup_duration (say 2.3 - 0.3) can
-# fall short of it by rounding, which would add a whole control period of backing up.
-TIME_TOLERANCE_S = 1e-6
 
 
 class StateMachineError(ValueError):
@@ -115,7 +112,7 @@ class BackUpStateMachine:
             self._entered_s = now_s
         self._last_now_s = now_s
         if (self._state is State.BACKING_UP
-                and now_s - self._entered_s >= self._settings.backup_duration - TIME_TOLERANCE_S):
+                and lasted(now_s - self._entered_s, self._settings.backup_duration)):
             self._enter(State.EXPLORING, now_s)
         if self._state is State.EXPLORING and distance_m < self._settings.trigger_distance:
             self._enter(State.BACKING_UP, now_s)
