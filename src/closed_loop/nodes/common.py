@@ -156,8 +156,10 @@ class LiveSettings:
     ``rosrun dynamic_reconfigure dynparam set /NODE NAME VALUE`` and rqt_reconfigure work.
 
     A change is checked whole by the settings class; if it passes, ``apply(new_settings)`` is called (the
-    node swaps its settings under its own lock) and the new values go to the parameter server; if not, the
-    call is refused with the reason (``dynparam`` prints it), logged, and nothing changes.
+    node swaps its settings under its own lock) and the new values go to the parameter server; if not, it is
+    refused as dynamic_reconfigure servers conventionally refuse: the values in force are kept and returned
+    (``dynparam set`` ends cleanly, ``dynparam get`` and rqt_reconfigure show what holds), and the reason is
+    logged once, as a warning.
     """
 
     def __init__(self, settings, apply):
@@ -173,8 +175,9 @@ class LiveSettings:
         try:
             new = reconfigure.changed(self.settings, config)
         except SettingsError as error:
-            rospy.logwarn('reconfigure refused: %s', error)
-            raise rospy.ServiceException('refused: %s' % error)
+            rospy.logwarn('reconfigure refused, the values in force are kept: %s', error)
+            config.update(reconfigure.live_values(self.settings))
+            return config
         old, self.settings = self.settings, new
         self._apply(new)
         rospy.loginfo('reconfigured: %s', reconfigure.differences(old, new) or 'no change')
