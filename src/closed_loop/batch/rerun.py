@@ -13,6 +13,7 @@ import math
 import os
 import sys
 
+from closed_loop import cli
 from closed_loop.batch import sweep, sweep_report
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, run_episode
 from closed_loop.batch.pictures import episode_picture
@@ -110,7 +111,7 @@ def report_differences(index, found, stream=sys.stderr):
 
 def row_parser(prog, description, out_help):
     """The command line of a tool that takes a row of a finished sweep: ``OUTPUT INDEX [--out FILE]``."""
-    parser = argparse.ArgumentParser(prog=prog, description=description)
+    parser = cli.parser(prog, description)
     parser.add_argument('output', help="the sweep's folder (its --output, with rows.csv)")
     parser.add_argument('index', type=int, help="the row's index (rows.csv's index column)")
     parser.add_argument('--out', help=out_help)

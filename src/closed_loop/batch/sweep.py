@@ -26,7 +26,7 @@ import sys
 import itertools
 import time
 
-from closed_loop import launcher
+from closed_loop import cli, launcher
 from closed_loop.batch import graph_keeper, pictures, rows_file, sweep_file, sweep_report
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
@@ -324,8 +324,9 @@ def run_command(prog, make, output, args, preface=None):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog='sweep', description=__doc__.splitlines()[0])
-    parser.add_argument('spec', help='the sweep file (YAML)')
+    parser = cli.parser('sweep', ' '.join(__doc__.split('\n\n')[0].split()))
+    parser.add_argument('spec', help='the sweep file (YAML), or the name of one this package ships (%s)'
+                        % ', '.join(sweep_file.shipped()))
     parser.add_argument('--output', help='directory for rows.csv, summary.txt, plot.png, report.html and pictures/ '
                         '(default: sweeps/NAME in the current directory)')
     add_cluster_arguments(parser)

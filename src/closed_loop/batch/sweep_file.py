@@ -34,11 +34,13 @@ closed_loop episode_plot OUTPUT INDEX``.
 """
 import itertools
 import math
+import os
 import re
 import time
 
 import yaml
 
+from closed_loop import paths
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare
 from closed_loop.yaml_check import Checker, FileError, load_yaml, quote, read_text
 
@@ -56,6 +58,8 @@ PROGRESS_S = 1.0
 #: ``report:`` when a sweep file does not say; a picture is about 40 kB and 0.2 s of a worker's time.
 REPORT_DEFAULTS = {'pictures': 'failures', 'max_pictures': 100}
 PICTURE_CHOICES = ('failures', 'all', 'none')
+#: The sweeps this package ships, each run by its name (``rosrun closed_loop sweep stop_thresholds``): NAME.yaml here.
+SHIPPED = ('config', 'sweeps')
 
 
 class SweepError(ValueError):
@@ -266,9 +270,32 @@ def _check(grid, progress):
             told = time.monotonic()
 
 
+def shipped():
+    """The names of the sweeps this package ships (:data:`SHIPPED`)."""
+    try:
+        return sorted(f[:-len('.yaml')] for f in os.listdir(paths.data_path(*SHIPPED)) if f.endswith('.yaml'))
+    except OSError:
+        return []
+
+
+def resolve(name_or_path):
+    """The file of a sweep given by its path, or by the name of one this package ships; anything else is
+    refused, naming the shipped ones."""
+    name_or_path = os.fspath(name_or_path)
+    if os.path.isfile(name_or_path):
+        return name_or_path
+    candidate = paths.data_path(*SHIPPED, name_or_path + '.yaml')
+    if name_or_path and os.sep not in name_or_path and os.path.isfile(candidate):
+        return candidate
+    raise SweepError('%s: no such sweep file, and no sweep of this package has that name (%s)'
+                     % (quote(name_or_path), ', '.join(shipped()) or 'none found'))
+
+
 def load(path, progress=None):
-    """The :class:`Sweep` of the file at ``path`` (at most MAX_FILE_BYTES of UTF-8 YAML, no key twice in a
-    mapping). A file that is not a sweep file is refused without quoting it."""
+    """The :class:`Sweep` of the file at ``path``, or of the shipped sweep of that name (:func:`resolve`): at most
+    MAX_FILE_BYTES of UTF-8 YAML, no key twice in a mapping. A file that is not a sweep file is refused without
+    quoting it."""
+    path = resolve(path)
     try:
         text = read_text(path, MAX_FILE_BYTES, what='sweep file')
         data = load_yaml(text, path)

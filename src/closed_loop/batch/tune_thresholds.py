@@ -16,6 +16,7 @@ the page with the rule and the recommendation at the top.
 import argparse
 import sys
 
+from closed_loop import cli
 from closed_loop.batch import sweep, sweep_file
 
 #: The slow zone begins this much travel (s at the cruise speed) before the stop zone.
@@ -92,7 +93,7 @@ def _floats(text):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(prog='tune_thresholds', description=__doc__.splitlines()[0])
+    parser = cli.parser('tune_thresholds', __doc__.splitlines()[0])
     parser.add_argument('--speeds', type=_floats, default=[0.3, 0.5, 1.0], help='cruise speeds, m/s')
     parser.add_argument('--stops', type=_floats, default=[round(0.15 + 0.05 * i, 2) for i in range(10)],
                         help='stop distances to try, m')

@@ -13,6 +13,7 @@ from dataclasses import asdict, fields
 
 import yaml
 
+from closed_loop import cli
 from closed_loop.sim import barn, barn_metrics, clutter
 from closed_loop.sim.profiles import ProfileError, load_profile
 from closed_loop.sim.world import WorldError
@@ -84,17 +85,19 @@ def main(argv=None):
     first.add_argument('--method', choices=sorted(METHODS), default=DEFAULT_METHOD)
     method = first.parse_known_args(argv)[0].method
     cls = METHODS[method][0]
-    parser = argparse.ArgumentParser(prog='generate_world', description='Write seeded world files, one per seed: '
-                                     'corridor (obstacles round a bent corridor, closed_loop.sim.clutter) or barn '
-                                     '(a cellular automaton\'s posts, closed_loop.sim.barn), with a way the robot fits '
-                                     'through.')
-    parser.add_argument('--method', choices=sorted(METHODS), default=DEFAULT_METHOD)
+    parser = cli.parser('generate_world', 'Write seeded world files, one per seed: '
+                            'corridor (obstacles round a bent corridor, closed_loop.sim.clutter) or barn '
+                            '(a cellular automaton\'s posts, closed_loop.sim.barn), with a way the robot fits '
+                            'through.')
+    parser.add_argument('--method', choices=sorted(METHODS), default=DEFAULT_METHOD,
+                        help='how the worlds are made (the options below are its own)')
     parser.add_argument('--output', '-o', required=True, help='a directory to write the world files into')
     parser.add_argument('--seeds', type=int, default=1, help='how many worlds, seeds SEED .. SEED+N-1')
     parser.add_argument('--force', action='store_true', help='overwrite existing files')
     defaults = cls()
     for name, value in asdict(defaults).items():
-        parser.add_argument('--' + name.replace('_', '-'), type=type(value), default=value)
+        parser.add_argument('--' + name.replace('_', '-'), type=type(value), default=value,
+                            help='%s worlds: %s' % (method, name.replace('_', ' ')))
     args = parser.parse_args(argv)
     if not os.path.isdir(args.output):
         parser.error('--output: expected an existing directory, got %r' % args.output)

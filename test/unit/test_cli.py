@@ -1,0 +1,49 @@
+"""Every command-line program's --help gives each option's default (closed_loop.cli), and a sweep is run by the
+name of one the package ships."""
+import argparse
+import os
+
+import pytest
+
+from closed_loop.batch import rerun, sweep, sweep_file, tune_thresholds
+from closed_loop.nodes import episode_bag
+from closed_loop.sim import generators
+
+PROGRAMS = [(sweep.main, ['x.yaml']), (tune_thresholds.main, []), (rerun.plot_main, ['out', '0']),
+            (episode_bag.main, ['out', '0']), (generators.main, ['--method', 'corridor']),
+            (generators.main, ['--method', 'barn'])]
+
+
+@pytest.mark.parametrize('main, argv', PROGRAMS)
+def test_help_gives_every_options_default(monkeypatch, main, argv):
+    parsers = []
+
+    def caught(parser, *_args, **_kwargs):
+        parsers.append(parser)
+        raise SystemExit(0)
+    monkeypatch.setattr(argparse.ArgumentParser, 'parse_args', caught)
+    with pytest.raises(SystemExit):
+        main(argv)
+    (parser,) = parsers
+    formatter = parser._get_formatter()
+    options = [a for a in parser._actions if a.option_strings and a.help != argparse.SUPPRESS
+               and not isinstance(a, argparse._HelpAction) and not a.required]
+    assert options
+    for action in options:
+        text = formatter._expand_help(action) if action.help else ''
+        assert 'default' in text, '%s %s: %r' % (parser.prog, action.option_strings[0], text)
+    help_text = parser.format_help()
+    assert '%(' not in help_text
+
+
+def test_a_shipped_sweep_is_run_by_its_name_and_an_unknown_name_lists_them():
+    names = sweep_file.shipped()
+    assert {'stop_thresholds', 'avoid_worlds'} <= set(names)
+    for name in names:
+        assert sweep_file.resolve(name) == os.path.join(sweep_file.paths.data_path('config', 'sweeps'),
+                                                         name + '.yaml')
+        built = sweep_file.load(name)
+        assert built.name == name and 1 <= len(built.specs) <= 60      # tens of episodes: under a minute on 2 cores
+    with pytest.raises(sweep_file.SweepError) as error:
+        sweep_file.resolve('no_such_sweep')
+    assert "'no_such_sweep': no such sweep file" in str(error.value) and 'stop_thresholds' in str(error.value)
