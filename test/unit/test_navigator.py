@@ -205,6 +205,13 @@ def test_reaching_the_goal_gives_zero_for_good():
     assert nav.update(6.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT).state is NavState.REACHED
 
 
+def test_with_no_goal_it_says_it_holds_the_start_heading():
+    nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0))
+    nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)
+    step = nav.update(5.0, (2.0, 0.0, 0.0), 0.5, 0.0, scan_of(), LASER, FOOTPRINT)
+    assert step.linear_x > 0 and step.reason == 'no goal: holding the start heading, 2.00 m along it so far', step
+
+
 def test_the_last_metre_is_a_direct_approach_unless_it_is_unsafe():
     nav = Navigator(NavigatorSettings(), (0.0, 0.0, 0.0), goal_xy=(0.0, 0.6))
     step = nav.update(0.0, (0.0, 0.0, 0.0), 0.0, 0.0, scan_of(), LASER, FOOTPRINT)

@@ -282,6 +282,8 @@ class Navigator:
                  None if self._way is None else to_frame(self._way, pose), stalled >= FOLLOW_AFTER_S)
         self._way = None if p.way is None else from_frame(p.way.route(), pose)
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
+        if p.kind == 'goal' and self.goal is None:      # (its aim is a point ahead on the start heading, no goal)
+            p = dataclasses.replace(p, reason='no goal: holding the start heading, %.2f m along it so far' % progress)
         state = NavState.GOAL_SEEKING if p.kind == 'goal' else NavState.AVOIDING
         self._enter(state, now_s, p.reason)
         return Step(state, p.linear_x, p.angular_z, p.reason, p)
