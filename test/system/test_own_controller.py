@@ -34,26 +34,14 @@ def rostest(env, home, name):
     return done.returncode, done.stdout, failures
 
 
-def test_a_package_of_ones_own_passes_its_rostests_and_a_failing_one_says_what_happened(fixture_env, tmp_path):
-    package = os.path.join(fixture_env['ROS_PACKAGE_PATH'].split(':')[0], 'fixture_controllers')
-    with open(os.path.join(package, 'test', 'tb3_obstacle.test')) as f:
-        stricter = f.read().replace('<param name="expect" value="stopped"/>', '<param name="expect" value="reached"/>')
-    assert 'value="reached"' in stricter
-    with open(os.path.join(package, 'test', 'tb3_expects_too_much.test'), 'w') as f:
-        f.write(stricter)
-    names = ('tb3_obstacle.test', 'goal_seeker.test', 'tb3_expects_too_much.test')
+def test_a_package_of_ones_own_passes_its_rostests(fixture_env, tmp_path):
+    # (A failing one, and how it reads: test_walkthrough, on the rospy package the docs build.)
+    names = ('tb3_obstacle.test', 'goal_seeker.test')
     with concurrent.futures.ThreadPoolExecutor(len(names)) as pool:
         results = dict(zip(names, pool.map(lambda n: rostest(fixture_env, tmp_path / n, n), names)))
-    for name in names[:2]:
+    for name in names:
         code, out, failures = results[name]
         assert code == 0 and not failures, '%s: %s\n%s' % (name, failures, out[-3000:])
-    code, out, failures = results['tb3_expects_too_much.test']
-    assert code != 0 and len(failures) == 1, out[-3000:]
-    # Its first line (rosunit adds the traceback below it): what was expected, and what the robot did, where,
-    # how close it came, how many contacts.
-    line = failures[0].strip().splitlines()[0]
-    assert line.startswith('outcome stopped, expected reached; the robot: stopped at (2.'), line
-    assert 'least clearance 0.' in line and '0 contacts' in line, line
 
 
 def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fixture_env, tmp_path):

@@ -41,7 +41,8 @@ class Scenario(unittest.TestCase):
         verdict = box['verdict']
         found = problems(verdict, expect)
         if found:
-            self.fail('%s; the robot: %s' % ('; '.join(found), verdict['why']))
+            rospy.logerr('scenario FAILED: %s; the robot: %s', '; '.join(found), verdict['why'])
+            self.fail('scenario FAILED: %s; the robot: %s' % ('; '.join(found), verdict['why']))
 
 
 def main():
