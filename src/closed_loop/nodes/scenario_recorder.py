@@ -28,8 +28,11 @@ from std_msgs.msg import Bool
 from closed_loop import recording
 from closed_loop.nodes.common import Publisher, init_node, load_settings
 
-#: How often the graph is looked at for new topics, and the free space checked (s, wall clock).
-POLL_S, ROOM_CHECK_PERIOD_S = 0.05, 2.0
+#: How often the graph is looked at for new topics (s, wall clock): until every topic is recorded, then once it is
+#: (in lockstep a look, a request to the master, is work the simulator waits for: on a loaded 2-core machine a look
+#: every 50 ms left it so few quiet moments that a recorded episode ran 12 times slower than real time); and how
+#: often the free space is checked.
+POLL_S, RECORDING_POLL_S, ROOM_CHECK_PERIOD_S = 0.05, 1.0, 2.0
 LEFT_OUT = ('/rosout', '/rosout_agg')
 #: Time 0 is not a valid time to rosbag play; what is received then is written 1 ns later.
 FIRST_TIME = rospy.Time(0, 1)
@@ -115,6 +118,8 @@ class ScenarioRecorder:
 
     def run(self):
         checked = time.monotonic()
+        stop = threading.Event()
+        rospy.on_shutdown(stop.set)
         while not rospy.is_shutdown():
             self.look()
             if time.monotonic() - checked > ROOM_CHECK_PERIOD_S:
@@ -123,7 +128,7 @@ class ScenarioRecorder:
                 if problem is not None:
                     self.close()
                     self.fail(problem)
-            time.sleep(POLL_S)
+            stop.wait(POLL_S if self.ready is None else RECORDING_POLL_S)
 
     def close(self):
         """Close the bag and give it its name (BAG.part -> BAG)."""
