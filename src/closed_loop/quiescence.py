@@ -203,7 +203,8 @@ class Quiescence:
         excused = self.excused
         before = self._last
         check = True                       # whether the thread lists are to be checked
-        waiting = {}                       # {index: time slices} of the pollers yet to look again
+        waiting = {}                       # {index: (its count of runs when seen asleep, or None)} of the pollers
+                                           # yet to look again
         # The pollers' counts are to be taken at the next reading: at first (one made wholly after what the caller
         # did, which a poller may find without being woken), and after anything ran.
         fresh = True
@@ -228,10 +229,16 @@ class Quiescence:
                 # poller read before it and run after it, but before it finished, saw none of it).
                 fresh = True
             elif fresh:
-                waiting = self._pollers_of(poll, after)
+                waiting = {i: self._asleep_mark(i) for i in self._pollers_of(poll, after)}
                 fresh = False
             elif waiting:
-                waiting = {i: n for i, n in waiting.items() if _slices(after[i]) == n}
+                # A poller has looked again once it has been seen asleep since the reference and has run after that:
+                # one that ran again without that may have been finishing a look begun before (preempted in it).
+                for i, mark in list(waiting.items()):
+                    if mark is None:
+                        waiting[i] = self._asleep_mark(i)
+                    elif _slices(after[i]) != mark:
+                        del waiting[i]
                 # A poller not seen to look for a while and asleep now looks no more (not a poller); one that is
                 # runnable waits for a CPU (a loaded machine), and is waited for.
                 gone = {i for i in waiting if t - looked.get(i, t) > POLLER_GIVE_UP_S
@@ -287,6 +294,13 @@ class Quiescence:
         excused = self.excused
         return all(_state(stat) in QUIET_STATES for key, stat in zip(self._keys, states)
                    if (key[0] == only if only is not None else key[0] not in excused))
+
+    def _asleep_mark(self, i):
+        """Poller ``i``'s count of runs if it is asleep now (its state read before the count: a run after the count
+        began after it was seen asleep), else None."""
+        if _state(_read(self._stat[i], 48)) in QUIET_STATES:
+            return _slices(_read(self._sched[i], 64))
+        return None
 
     def _pollers_of(self, poll, counts):
         """{index: time slices in ``counts``} of the pollers to await: every poller (``poll`` EVERY), or the pollers
