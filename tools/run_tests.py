@@ -11,8 +11,8 @@ Rostest files each get the master rostest starts on a free port. First roslaunch
 then two things at once: the rostest files that measure rates or wall time or change a node while it runs
 (ALONE) one at a time, at the normal CPU priority, and beside them the unit tests, every system test file and
 every other rostest file, SIDE_BY_SIDE at a time, at the lowest CPU priority (nice BESIDE_NICENESS), so that
-they take only the CPU the ALONE file leaves (the system test files that sweep graph episodes first, and never
-two of them at once). Each has its own output in test_output/ (printed when it fails).
+they take only the CPU the ALONE file leaves (the system test files that follow a docs page in real time and
+those that sweep graph episodes first, and never two of the latter at once). Each has its own output in test_output/ (printed when it fails).
 
 Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests: N passed, M failed, K skipped``
 (pytest and rostest counted together), after a line for each test skipped (only where this machine cannot give what
@@ -99,6 +99,9 @@ BESIDE_NICENESS = 19
 #: System test files that run sweeps of graph episodes (two graphs at once each): they start first, and never
 #: two of them at the same time, so that the machine is not asked for six graphs at once.
 GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreement', 'test_failure_report')
+#: System test files that follow a docs page in real time, one command after another (minutes, mostly waiting on
+#: simulated time): they start with the first jobs, so that the run does not wait for them at its end.
+LONG = ('test_tutorial',)
 
 
 def call(cmd, out, timeout=None, **kwargs):
@@ -235,9 +238,12 @@ def side_by_side_lanes(jobs, count, niceness):
     """SIDE_BY_SIDE threads (not started) that run ``jobs`` at ``niceness``, handing each result to ``count``:
     the GRAPH_SWEEPS files first and one at a time (a lane that would start a second one takes the next other
     job instead)."""
+    def name(job):
+        return os.path.splitext(os.path.basename(job[0]))[0]
+
     def heavy(job):
-        return os.path.splitext(os.path.basename(job[0]))[0] in GRAPH_SWEEPS
-    waiting = sorted(jobs, key=lambda job: not heavy(job))
+        return name(job) in GRAPH_SWEEPS
+    waiting = sorted(jobs, key=lambda job: (name(job) not in LONG, not heavy(job)))
     lock = threading.Lock()
     running_heavy = [False]
 
