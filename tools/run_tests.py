@@ -265,8 +265,21 @@ def side_by_side_lanes(jobs, count, niceness):
     return [threading.Thread(target=lane) for _ in range(SIDE_BY_SIDE)]
 
 
+def machine_busy_s():
+    """CPU seconds every core of this machine has been busy since it started (``/proc/stat``: user, nice, system,
+    irq, softirq), or None where it cannot be read. A job's own figure counts only the processes it waited for
+    (not, for one, the workers that Dask's forkserver forks for a sweep); this counts everything."""
+    try:
+        with open('/proc/stat') as f:
+            fields = f.readline().split()
+        return sum(int(fields[i]) for i in (1, 2, 3, 6, 7)) / os.sysconf('SC_CLK_TCK')
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def main():
     netenv.apply_loopback_defaults(os.environ)
+    started, busy_before = time.monotonic(), machine_busy_s()
     # Started from a background job (`make test &`), SIGINT is ignored and every process started here would
     # inherit that: the tests that stop a node, a launch or a sweep as Ctrl-C does need it back.
     signal.signal(signal.SIGINT, signal.default_int_handler)
@@ -293,6 +306,11 @@ def main():
         print('SKIPPED: %s' % name)
     for name in failures:
         print('FAILED: %s' % name)
+    busy_after, wall_s = machine_busy_s(), time.monotonic() - started
+    if busy_before is not None and busy_after is not None:
+        print('== the machine was busy %.0f CPU-s in the %d min %02d s of the tests (%.2f of its %d cores)'
+              % (busy_after - busy_before, wall_s // 60, wall_s % 60, (busy_after - busy_before) / wall_s,
+                 os.cpu_count() or 1))
     print('tests: %d passed, %d failed, %d skipped' % (passed, failed, len(skipped)))
     return 1 if failed or passed == 0 else 0
 

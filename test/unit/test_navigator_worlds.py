@@ -2,8 +2,8 @@
 the goal without a contact, holds its start heading once past the obstacles when it has no goal, and gives up at
 rest in a dead end. The node is this core behind ROS: that it decides as the core does, in lockstep, is proven
 on a graph by the rostests ``episode_agreement`` and ``avoid_dead_end`` and by ``test_graph_agreement``; the
-rostests ``avoid_*`` keep what only a graph has (the goal on ``move_base_simple/goal``, the robot profiles
-through ``robot:=``, no goal in a world that names one: ``avoid_hold_course``)."""
+rostests ``avoid_*`` keep what only a graph has (the goal on ``move_base_simple/goal``, no goal in a world that
+names one: ``avoid_hold_course``), and ``robot_burger``, ``robot_jackal`` the profiles through ``robot:=``."""
 import math
 
 import pytest
@@ -15,15 +15,17 @@ HOLD_TOLERANCE_RAD = math.radians(10.0)
 AT_REST_MPS = 0.01
 
 
-def navigate(world, goal, limit_s, **settings):
-    return run_episode(EpisodeSpec(world=world, controller='avoid_obstacles', goal=goal, settings=settings,
-                                   time_limit_s=limit_s, keep_trajectory=True))
+def navigate(world, goal, limit_s, robot='closed_loop', **settings):
+    return run_episode(EpisodeSpec(world=world, robot=robot, controller='avoid_obstacles', goal=goal,
+                                   settings=settings, time_limit_s=limit_s, keep_trajectory=True))
 
 
-@pytest.mark.parametrize('world, goal', [('obstacle_left', (10.0, 0.0)), ('obstacle_right', (10.0, 0.0)),
-                                         ('slalom', (10.0, 0.0)), ('obstacle_course', (7.0, 0.0))])
-def test_the_navigator_reaches_the_goal_round_the_obstacles_without_contact(world, goal):
-    result = navigate(world, goal, 60.0)
+@pytest.mark.parametrize('world, goal, robot, limit_s', [
+    ('obstacle_left', (10.0, 0.0), 'closed_loop', 60.0), ('obstacle_right', (10.0, 0.0), 'closed_loop', 60.0),
+    ('slalom', (10.0, 0.0), 'closed_loop', 60.0), ('obstacle_course', (7.0, 0.0), 'closed_loop', 60.0),
+    ('obstacle_course', (7.0, 0.0), 'burger', 120.0), ('obstacle_course', (7.0, 0.0), 'jackal', 80.0)])
+def test_the_navigator_reaches_the_goal_round_the_obstacles_without_contact(world, goal, robot, limit_s):
+    result = navigate(world, goal, limit_s, robot)
     modes = {row[7] for row in result.trajectory}
     x, y, _ = result.final_pose
     assert result.outcome == 'reached' and result.contacts == 0, result.why
