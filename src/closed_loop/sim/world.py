@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from typing import Optional, Tuple
 
 from closed_loop.geometry import Pose2D  # noqa: F401  (a world's start and goal poses; closed_loop.sim.world.Pose2D)
-from closed_loop.sim import shapes
+from closed_loop.sim import occupancy_map, shapes
 from closed_loop.sim.world_robots import RobotSpec, check_robots_apart, check_start, parse_robots
 from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
 
@@ -63,7 +63,8 @@ NAMED_COLORS = {
 OBSTACLE_TYPES = ('box', 'cylinder', 'wall')
 WORLD_FILE_SUFFIX = '.yaml'
 
-_TOP_KEYS = ('name', 'description', 'ground', 'robot', 'robots', 'goal', 'obstacles')
+_TOP_KEYS = ('name', 'description', 'ground', 'robot', 'robots', 'goal', 'obstacles', 'map')
+_MAP_KEYS = ('file', 'unknown', 'height')
 _GOAL_KEYS = ('x', 'y')
 _GROUND_KEYS = ('color',)
 _ROBOT_KEYS = ('start',)
@@ -210,6 +211,8 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
                        obstacle.name)
         seen[obstacle.name] = index
         obstacles.append(obstacle)
+    if 'map' in top:
+        obstacles += _map_obstacles(check, top['map'], source)
 
     goal = None
     if 'goal' in top:
@@ -285,6 +288,22 @@ def _parse_obstacle(check, raw, field):
                     color=color, motion=motion)
 
 
+def _map_obstacles(check, value, source):
+    """The static boxes of a map_server map (``map: {file, unknown, height}``: closed_loop.sim.occupancy_map)."""
+    raw = check.mapping(value, 'map', _MAP_KEYS)
+    name = check.string(check.get(raw, 'file', 'map.file'), 'map.file')
+    path = name if os.path.isabs(name) else os.path.join(os.path.dirname(os.path.abspath(source)), name)
+    unknown = raw.get('unknown', 'obstacle')
+    if unknown not in ('obstacle', 'free'):
+        check.fail('map.unknown', 'obstacle or free (what the map has not seen)', unknown)
+    height = check.number(raw.get('height', DEFAULT_WALL_HEIGHT_M), 'map.height', 'a finite number > 0 (m)',
+                          positive=True)
+    cells, resolution, origin = occupancy_map.read_map(path, WorldError)
+    boxes = occupancy_map.map_boxes(cells, resolution, origin, unknown == 'obstacle', height,
+                                    error=lambda what, got: check.fail('map.file', what, got))
+    return [Obstacle(shape='box', radius=0.0, color=occupancy_map.MAP_COLOR, motion=None, **box) for box in boxes]
+
+
 def _parse_wall(check, raw, field, name, color):
     """A wall is a box along its centre line from ``start`` to ``end``, standing on the ground."""
     point = '[x, y]: 2 finite numbers (m)'
@@ -331,11 +350,16 @@ def load_world(path, footprint=None, check_starts=True):
 
     A missing or unreadable file, one over ``MAX_WORLD_FILE_BYTES``, a YAML syntax error (with its
     line) and every problem :func:`parse_world` finds (more than ``MAX_OBSTACLES`` obstacles among
-    them) raise :class:`WorldError`, whose message is one line and quotes at most a short excerpt.
+    them) raise :class:`WorldError`, whose message is one line and quotes at most a short excerpt. A
+    map_server map's YAML file is a world of its cells, the robot at (0, 0) (:mod:`closed_loop.sim.occupancy_map`).
     """
     path = os.fspath(path)
     text = read_text(path, MAX_WORLD_FILE_BYTES, WorldError, 'world file')
-    return parse_world(load_yaml(text, path, WorldError), path, footprint, check_starts)
+    data = load_yaml(text, path, WorldError)
+    if occupancy_map.is_map(data):          # a map_server map as it is: its cells, the robot at its origin
+        data = {'name': os.path.splitext(os.path.basename(path))[0], 'map': {'file': os.path.abspath(path)},
+                'description': 'the map %s (unknown cells are obstacles)' % path}
+    return parse_world(data, path, footprint, check_starts)
 
 
 def available_worlds(worlds_dir):
