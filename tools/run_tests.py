@@ -176,8 +176,10 @@ def run_pytest(path, results_dir, select=None, niceness=0):
     log = os.path.join(results_dir, name + '.log')
     started = time.monotonic()
     with open(log, 'w') as out:
-        code, cpu_s = call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider', '--junitxml', xml]
-                           + (['-k', select] if select else []), out, cwd=ROOT, preexec_fn=lower_priority(niceness))
+        # (A test marked bench, a sweep of many scenarios, is make bench's: test/bench/bench_tutorial.py.)
+        code, cpu_s = call([sys.executable, '-m', 'pytest', path, '-q', '-p', 'no:cacheprovider', '--junitxml', xml,
+                            '-m', 'not bench'] + (['-k', select] if select else []), out, cwd=ROOT,
+                           preexec_fn=lower_priority(niceness))
     p, f, s, names = count_junit(xml) if os.path.exists(xml) else (0, 0, [], [])
     if code not in (0, 5) and f == 0:
         f, names = 1, ['%s (pytest exit %d, see %s)' % (name, code, log)]

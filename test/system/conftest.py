@@ -17,6 +17,11 @@ from closed_loop import netenv  # noqa: E402
 MASTER_WAIT_S = 20.0
 
 
+def pytest_configure(config):
+    config.addinivalue_line('markers', 'bench: a sweep of many scenarios, run by make bench (test/bench/bench_tutorial.py), '
+                                       'not by make test')
+
+
 def free_port():
     """A loopback port for a test's own master (below the ephemeral range: a test's watcher once waited 120 s
     on a port a node's server had taken)."""

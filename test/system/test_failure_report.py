@@ -190,17 +190,17 @@ LARGE = textwrap.dedent("""\
 
 
 def test_a_large_sweep_of_failures_draws_only_its_first_pictures_and_holds_no_trajectories(tmp_path):
-    """200 episodes that all time out (0.2 s in an empty world): the report keeps its first 25 pictures
+    """100 episodes that all time out (0.2 s in an empty world): the report keeps its first 25 pictures
     (max_pictures; 100 by default), no trajectory comes back, and the sweep's own process stays small
     (bench_report runs 10,000 with the default)."""
     script = tmp_path / 'large.py'
     script.write_text(LARGE)
-    done = subprocess.run([sys.executable, str(script), '200', str(tmp_path / 'out'), '25'], stdout=subprocess.PIPE,
+    done = subprocess.run([sys.executable, str(script), '100', str(tmp_path / 'out'), '25'], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=400)
     assert done.returncode == 0, done.stdout[-3000:]
     figures = json.loads(done.stdout.strip().splitlines()[-1])
     rows = rows_of(tmp_path / 'out')
-    assert figures['rows'] == len(rows) == 200 and {r['outcome'] for r in rows.values()} == {'timed_out'}
+    assert figures['rows'] == len(rows) == 100 and {r['outcome'] for r in rows.values()} == {'timed_out'}
     assert len(os.listdir(tmp_path / 'out' / 'pictures')) == 25
     assert (tmp_path / 'out' / 'trajectories.jsonl').read_text() == ''
     assert figures['peak_mb'] < 250, figures

@@ -289,6 +289,7 @@ def test_exercise_1_around_the_box_with_a_goal_and_without_and_the_demo_through_
     page.done()
 
 
+@pytest.mark.bench       # 236 episodes in four sweeps: make bench runs it (test/bench/bench_tutorial.py), not make test
 def test_exercise_2_tunes_the_thresholds_and_runs_the_shipped_sweeps_and_a_copy(learner):
     page = Page('Exercise 2: tune the thresholds systematically')
     code, out = learner.run('rosrun closed_loop tune_thresholds --seeds 1', timeout_s=900)
