@@ -7,8 +7,8 @@ Usage (inside ``source env.sh``; ``make test`` does that):
 Unit tests (test/unit) need no master. System tests (test/system) start real ROS processes outside
 rostest -- a master per test on a free loopback port, roslaunch, rosbag, network namespaces and mounts (where
 this machine allows no namespace or mount, the tests that need one skip: test/machine.py).
-Rostest files each get the master rostest starts on a free port. First roslaunch-check on every launch file;
-then two things at once: the rostest files that measure rates or wall time or change a node while it runs
+Rostest files each get the master rostest starts on a free port. roslaunch-check on every launch file, beside
+two things at once: the rostest files that measure rates or wall time or change a node while it runs
 (ALONE) one at a time, at the normal CPU priority, and beside them the unit tests, every system test file and
 every other rostest file, SIDE_BY_SIDE at a time, at the lowest CPU priority (nice BESIDE_NICENESS), so that
 they take only the CPU the ALONE file leaves (the system test files that follow a docs page in real time and
@@ -299,8 +299,15 @@ def main():
     if not args.unit_only:
         parts.append(run_launch_checks)
     parts.append(run_all)
-    for part in parts:
-        p, f, s, names = part(args)
+    # The launch checks (one process at a time, 7 s) run beside the tests rather than before them.
+    results = [None] * len(parts)
+    threads = [threading.Thread(target=lambda i=i, part=part: results.__setitem__(i, part(args)))
+               for i, part in enumerate(parts)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    for p, f, s, names in results:
         passed, failed, skipped = passed + p, failed + f, skipped + s
         failures += names
     # A test skips only where this machine cannot give what it needs (test/machine.py), saying what in one line.
