@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from closed_loop.batch.episode import EpisodeSpec, run_episode
+from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare, run_episode
 from closed_loop.sim import occupancy_map, shapes
 from closed_loop.sim.world import WorldError, load_world
 
@@ -106,7 +106,29 @@ def test_an_office_map_is_a_world_of_few_boxes_in_which_the_navigator_goes_throu
     assert result.outcome == 'reached' and result.contacts == 0, result.why
     # The map's YAML file as it is is a world too: the robot at the origin, the unknown space around solid.
     bare = load_world(tmp_path / 'office.yaml')             # (a key map_server does not read is left alone)
-    assert (bare.robot_start.x, bare.robot_start.y, bare.robot_start.yaw) == (0.0, 0.0, 0.0) and len(bare.obstacles) == len(world.obstacles)
+    assert (bare.robot_start.x, bare.robot_start.y, bare.robot_start.yaw) == (0.0, 0.0, 0.0)
+    assert len(bare.obstacles) == len(world.obstacles)
+    # Started elsewhere (the simulator's ~start, sim.start of an episode): back from the far room to the origin.
+    back = run_episode(EpisodeSpec(world=str(tmp_path / 'office.yaml'), controller='avoid_obstacles',
+                                   goal=(0.0, 0.0), sim={'start': '8.5 5.0 -1.5708'}, time_limit_s=120.0))
+    assert back.outcome == 'reached' and back.contacts == 0, back.why
+
+
+@pytest.mark.parametrize('start, message', [
+    ('-0.5 1.925 0', 'sim.start: expected a pose where the robot'),               # in the wall by the first door
+    ('1 2', "sim: ~start: expected 'x y yaw' (3 finite numbers: m, m, rad) or empty, got '1 2'"),
+    ('1 2 nan', "sim: ~start: expected 'x y yaw'"),
+])
+def test_a_start_in_place_of_the_worlds_is_checked_as_the_worlds_is(tmp_path, start, message):
+    office(tmp_path)
+    with pytest.raises(EpisodeError) as error:
+        prepare(EpisodeSpec(world=str(tmp_path / 'office.yaml'), controller='avoid_obstacles', sim={'start': start}))
+    assert message in str(error.value) and '\n' not in str(error.value), str(error.value)
+
+
+def test_a_world_of_several_robots_takes_no_start_in_place_of_theirs():
+    with pytest.raises(EpisodeError, match='sim.start: expected a world of one robot'):
+        prepare(EpisodeSpec(world='two_robots', sim={'start': '0 0 0'}))
 
 
 @pytest.mark.parametrize('fields, pixels, message', [

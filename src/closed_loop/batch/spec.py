@@ -14,7 +14,8 @@ from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
 from closed_loop.batch.judge import JudgeSettings, Verdict
 from closed_loop.sim.rig import Rig
 from closed_loop.settings import SettingsError, check
-from closed_loop.sim.world import load_world, parse_world, resolve_world
+from closed_loop.sim.world import WorldError, load_world, parse_world, resolve_world
+from closed_loop.sim.world_robots import with_start
 from closed_loop.yaml_check import quote
 
 #: A goal counts as reached when ground truth ends this close to it (m), with no contact.
@@ -202,9 +203,14 @@ def prepare(spec, cache=None):
                       scan_noise_stddev=spec.scan_noise, noise_seed=spec.seed)
     sim_params.update(spec.sim)
     try:
-        Rig.check_params(sim_params)
+        start = Rig.check_params(sim_params)[0].start_pose
     except SettingsError as error:
         raise EpisodeError('sim: %s' % error)
+    if start is not None:               # sim: {start: 'x y yaw'}: where the robot starts, in place of the world's
+        try:
+            world = with_start(world, start, profile.footprint, WorldError, 'sim.start')
+        except WorldError as error:
+            raise EpisodeError(str(error))
     for name, low in (('time_limit_s', 0.0), ('command_delay_s', 0.0), ('timer_phase_s', 0.0)):
         value = getattr(spec, name)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \

@@ -15,7 +15,7 @@ from std_srvs.srv import Empty, EmptyResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
-from closed_loop.sim import world as world_mod
+from closed_loop.sim import world as world_mod, world_robots
 from closed_loop import robot_model
 from closed_loop.nodes import sensor_messages as to_msgs
 from closed_loop.nodes import sim_lockstep
@@ -114,7 +114,11 @@ class SimNode:
             # Every start must be free for its robot's footprint, not a generic disc.
             footprints = {setup.name: robot_model.load_robot_model(setup.urdf, setup.settings.names).footprint
                           for setup in setups}
-            world = world_mod.load_world(path, footprints if world.robots else footprints[''])
+            world = world_mod.load_world(path, footprints if world.robots else footprints[''],
+                                         check_starts=self.settings.start_pose is None)
+            if self.settings.start_pose is not None:
+                world = world_robots.with_start(world, self.settings.start_pose, footprints.get(''),
+                                                world_mod.WorldError, '~start')
         except robot_model.RobotModelError as error:
             rospy.logfatal('sim_node: %s', error)
             sys.exit(1)

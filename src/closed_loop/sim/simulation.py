@@ -9,6 +9,7 @@ ROS: the node hands it commands and hands its sensors' readings to ROS.
 Conventions (REP 103): metres, seconds of simulated time, radians, x forward, z up. The world frame is
 the ground truth frame; odometry starts at the robot's start pose.
 """
+import math
 from dataclasses import dataclass
 
 import numpy
@@ -18,7 +19,7 @@ from closed_loop.sim import obstacles, shapes
 from closed_loop import robot_model
 from closed_loop.geometry import yaw_quaternion
 from closed_loop.sim.robot_body import ALL_GROUPS, Robot, RobotSetup, RobotView  # noqa: F401 (RobotSetup for callers)
-from closed_loop.settings import param
+from closed_loop.settings import SettingsError, param
 
 pybullet = import_pybullet()
 
@@ -44,6 +45,8 @@ MAX_IDLE_CLIENTS = 1
 class SimSettings:
     """The simulator node's ``~parameters``; defaults here only."""
     world: str = param('wall', '', 'world name in worlds/ or a path to a world YAML file')
+    start: str = param('', '', "the robot's start as 'x y yaw' (m, m, rad; the world frame) in place of the "
+                       "world's (a map as it is has none: the origin); empty: the world's")
     gui: bool = param(False, '', "open pybullet's own window (needs a display)")
     physics_rate_hz: float = param(100.0, 'Hz', 'physics steps per simulated second', minimum=10.0,
                                    maximum=2000.0)
@@ -81,6 +84,23 @@ class SimSettings:
     left_wheel_joints: str = param(robot_model.LEFT_WHEEL_JOINT, '', 'the left wheel joints, separated by '
                                    'spaces (several: skid steer, driven together)')
     right_wheel_joints: str = param(robot_model.RIGHT_WHEEL_JOINT, '', 'the right wheel joints')
+
+    @property
+    def start_pose(self):
+        """``start`` as (x, y, yaw), or None for the world's."""
+        try:
+            values = tuple(float(v) for v in self.start.split())
+        except ValueError:
+            values = ()
+        if not self.start.strip():
+            return None
+        if len(values) != 3 or not all(math.isfinite(v) for v in values):
+            raise SettingsError("~start: expected 'x y yaw' (3 finite numbers: m, m, rad) or empty, got %r"
+                                % self.start)
+        return values
+
+    def check_together(self):
+        self.start_pose         # (raises SettingsError for a malformed one)
 
     @property
     def names(self):

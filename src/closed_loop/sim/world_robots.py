@@ -3,11 +3,15 @@ and the checks that every robot starts clear of the obstacles and of the other r
 footprint where it is known. Used by ``closed_loop.sim.world``; errors go through its field checker, so they
 name the file and the field. Free of ROS.
 """
+import dataclasses
+import math
 import re
 from dataclasses import dataclass
 
 from closed_loop.sim.obstacles import disk_overlaps, footprint_overlaps
 from closed_loop.sim.shapes import robot_corners, separated
+from closed_loop.geometry import Pose2D
+from closed_loop.yaml_check import Checker
 
 #: The robot as seen by the start-pose check when its footprint is not known (a world checked on its
 #: own): a disk of this radius (m) around base_footprint. With the robot's footprint (the simulator
@@ -94,3 +98,18 @@ def check_robots_apart(check, robots, footprints):
                              robot_corners(b.start, _rect(footprints.get(b.name)))):
                 check.fail('robots[%d].start' % i, 'a pose clear of robots[%d] %r' % (j, b.name),
                            {'x': a.start.x, 'y': a.start.y, 'yaw': a.start.yaw})
+
+
+def with_start(world, start, footprint, error_class, field='start'):
+    """``world`` (one robot) with its robot starting at ``start`` ((x, y, yaw): m, m, rad, in the world frame)
+    in place of where its file says (a map's world says nothing: the origin), checked clear of the obstacles as a
+    start in the file is; an error (``error_class``, naming the world's file and ``field``) otherwise."""
+    check = Checker(world.source, error_class)
+    if world.robots:
+        check.fail(field, 'a world of one robot (a world with robots: gives each its start there)', start)
+    if not isinstance(start, (list, tuple)) or len(start) != 3 or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in start):
+        check.fail(field, '[x, y, yaw]: 3 finite numbers (m, m, rad)', start)
+    pose = Pose2D(*(float(v) for v in start))
+    check_start(check, world.obstacles, pose, footprint, field)
+    return dataclasses.replace(world, robot_start=pose)
