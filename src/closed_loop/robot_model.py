@@ -22,6 +22,8 @@ BODY_LINK = 'base_link'
 SCAN_FRAME = 'base_scan'
 CAMERA_FRAME = 'camera_link'
 CAMERA_OPTICAL_FRAME = 'camera_optical_frame'
+#: The joints a wheel turns on.
+WHEEL_JOINT_TYPES = ('continuous', 'revolute')
 
 
 class RobotModelError(ValueError):
@@ -96,6 +98,9 @@ def load_robot_model(urdf, names=RobotNames(), source=None):
 @functools.lru_cache(maxsize=16)
 def _robot_model(urdf, names, source):
     source = source or 'robot_description'
+    if '<mesh' in urdf:                     # every mesh there and usable before anything runs
+        from closed_loop import description
+        description.meshes(urdf, source)
     root, poses = link_transforms(urdf, names.base_frame, source)
     joints = {j.get('name'): j for j in root.findall('joint')}
     links = {k.get('name'): k for k in root.findall('link')}
@@ -112,8 +117,10 @@ def _robot_model(urdf, names, source):
             raise RobotModelError('%s: no %s wheel joint named' % (source, side))
         for name in joint_names:
             joint = joints.get(name)
-            if joint is None:
-                raise RobotModelError('%s: joint %r is missing' % (source, name))
+            if joint is None or joint.get('type') not in WHEEL_JOINT_TYPES:
+                raise RobotModelError('%s: joint %r %s; %s' % (
+                    source, name, 'is missing' if joint is None else 'is not a wheel: it is %s' % joint.get('type'),
+                    _wheel_hint(joints)))
             child_name = joint.find('child').get('link')
             ys[side].append(float(poses[child_name][1, 3]))
             cylinder = links[child_name].find('collision/geometry/cylinder')
@@ -128,6 +135,15 @@ def _robot_model(urdf, names, source):
     return RobotModel(urdf_text=urdf, source=source, names=names, wheel_radius_m=radii[0],
                       wheel_separation_m=separation, footprint=footprint(urdf, source, names.base_frame),
                       scan_pose=frame_pose_2d(urdf, names.scan_frame, source, names.base_frame))
+
+
+def _wheel_hint(joints):
+    """What the description offers as wheels, for an error about one that is not there."""
+    wheels = sorted(name for name, joint in joints.items() if joint.get('type') in WHEEL_JOINT_TYPES)
+    if not wheels:
+        return 'the description has no continuous joints: without wheels it cannot drive'
+    return ('its continuous joints are %s: the profile names the wheels (sim: left_wheel_joints, '
+            'right_wheel_joints)' % ', '.join(wheels))
 
 
 # --- planar geometry from the URDF text (robot_description) --------------------------------------------
@@ -213,9 +229,14 @@ def fixed_joints(urdf_text, source='robot_description'):
     return out
 
 
-def _shape_corners(geometry):
-    """Points (in the shape's own frame) whose xy hull bounds the shape seen from above, or None."""
+def _shape_corners(geometry, source):
+    """Points (in the shape's own frame) whose xy hull bounds the shape seen from above, or None. A mesh's are its
+    vertices as pybullet takes them (``closed_loop.description``)."""
     box, cylinder, sphere = geometry.find('box'), geometry.find('cylinder'), geometry.find('sphere')
+    mesh = geometry.find('mesh')
+    if mesh is not None:
+        from closed_loop import description
+        return description.mesh_points(*description.mesh_file(mesh, source))
     if box is not None:
         hx, hy, hz = (0.5 * float(v) for v in box.get('size').split())
         return np.array([[sx * hx, sy * hy, sz * hz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
@@ -230,10 +251,10 @@ def _shape_corners(geometry):
 
 @functools.lru_cache(maxsize=32)
 def footprint(urdf_text, source='robot_description', base_frame=BASE_FRAME):
-    """The :class:`Footprint` around every ``<collision>`` box, cylinder and sphere of the robot.
+    """The :class:`Footprint` around every ``<collision>`` box, cylinder, sphere and mesh of the robot.
 
-    Meshes have no size here and are refused; a robot with no collision shape is refused too. Worked out once
-    per description (an episode asks for it at every start).
+    A robot with no collision shape is refused. Worked out once per description (an episode asks for it at
+    every start).
     """
     robot, poses = link_transforms(urdf_text, base_frame, source)
     points = []
@@ -243,9 +264,9 @@ def footprint(urdf_text, source='robot_description', base_frame=BASE_FRAME):
             continue
         for collision in link.findall('collision'):
             geometry = collision.find('geometry')
-            corners = _shape_corners(geometry) if geometry is not None else None
+            corners = _shape_corners(geometry, source) if geometry is not None else None
             if corners is None:
-                raise RobotModelError('%s: link %r: a collision needs a box, cylinder or sphere'
+                raise RobotModelError('%s: link %r: a collision needs a box, cylinder, sphere or mesh'
                                       % (source, link.get('name')))
             m = pose @ _origin_matrix(collision)
             points.append(corners @ m[:3, :3].T + m[:3, 3])

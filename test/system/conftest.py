@@ -185,13 +185,14 @@ def drive_in_sim(env, tmp_path, controller_argv, watch_script, world='wall', tim
 
 
 def fixture_workspace(tmp_path):
-    """test/fixtures/fixture_controllers built as a user builds a package of their own: copied into the src/
+    """test/fixtures/fixture_controllers (and the robot description package it tests with) built as a user builds
+    packages of their own: copied into the src/
     of a catkin workspace of its own, over this package's (the environment's), with catkin_make; returns
     the environment with that workspace's setup.bash sourced."""
     import shutil
     workspace = tmp_path / 'fixture_ws'
-    shutil.copytree(os.path.join(ROOT, 'test', 'fixtures', 'fixture_controllers'),
-                    str(workspace / 'src' / 'fixture_controllers'))
+    for package in ('fixture_controllers', 'fixture_robot_description'):
+        shutil.copytree(os.path.join(ROOT, 'test', 'fixtures', package), str(workspace / 'src' / package))
     build = subprocess.run(['catkin_make', '-C', str(workspace), '-DPYTHON_EXECUTABLE=' + sys.executable],
                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=600)
     assert build.returncode == 0, build.stdout[-4000:]

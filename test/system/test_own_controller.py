@@ -1,7 +1,8 @@
 """Controllers written elsewhere (test/fixtures/fixture_controllers: a rospy node that reads a 360-sample scan
 by index the way TurtleBot3's obstacle example does, and a roscpp node), in a package of their own built in a
 catkin workspace of its own, as docs/own_controller.md tells a user to: judged by scenario.launch in that
-package's rostests, and by a sweep of graph episodes; and the rows a sweep writes when a controller goes
+package's rostests, and by a sweep of graph episodes; a robot of one's own (test/fixtures/fixture_robot_description,
+built in the same workspace) driven in a rostest and a sweep; and the rows a sweep writes when a controller goes
 wrong."""
 import concurrent.futures
 import glob
@@ -42,6 +43,25 @@ def test_a_package_of_ones_own_passes_its_rostests(fixture_env, tmp_path):
     for name in names:
         code, out, failures = results[name]
         assert code == 0 and not failures, '%s: %s\n%s' % (name, failures, out[-3000:])
+
+
+def test_a_robot_of_ones_own_is_driven_in_a_rostest_and_a_sweep(fixture_env, tmp_path):
+    # fixture_robot_description, built in the same workspace: a xacro with includes, args and macros, STL and
+    # COLLADA collision meshes, a caster, the LIDAR on a mount. Its profile file is all closed_loop is told.
+    sweep = os.path.join(fixture_env['ROS_PACKAGE_PATH'].split(':')[0], 'fixture_controllers', 'sweeps',
+                         'my_robot.yaml')
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        course = pool.submit(rostest, fixture_env, tmp_path / 'rostest', 'my_robot.test')
+        done, rows = run_sweep(fixture_env, sweep, tmp_path / 'out', '--workers', '1')
+        code, out, failures = course.result()
+    assert code == 0 and not failures, '%s\n%s' % (failures, out[-3000:])
+    assert done.returncode == 0 and sorted(rows) == [0, 1], done.stdout[-3000:]
+    for row in rows.values():
+        # tb3_obstacle (this workspace's node) and closed_loop's stop_on_obstacle stop short of the wall at x = 2.5,
+        # the STL chassis' front 0.18 m ahead of the robot's origin.
+        assert row['outcome'] == 'stopped' and row['contacts'] == '0', row
+        assert 0.1 < float(row['min_clearance_m']) < 0.5 and abs(float(row['final_y'])) < 0.05, row
+    assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
 
 
 def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fixture_env, tmp_path):

@@ -81,7 +81,7 @@ def test_footprint_of_a_turned_and_offset_box():
     ('<robot', 'cannot parse'),
     ('<robot name="r"><link name="base_footprint"/></robot>', 'no collision shapes'),
     ('<robot name="r"><link name="base_footprint"><collision><geometry><mesh filename="x"/></geometry>'
-     '</collision></link></robot>', 'box, cylinder or sphere'),
+     '</collision></link></robot>', "mesh 'x': expected package://PKG/path"),
     ('<robot name="r"><link name="base_link"/></robot>', "'base_footprint' is missing"),
 ])
 def test_bad_urdfs_are_refused_by_name(urdf, match):

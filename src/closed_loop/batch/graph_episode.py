@@ -72,7 +72,7 @@ def launch_text(spec, prepared, folder, bag=None):
         world = os.path.abspath(world)
     judge = judge_settings(spec, p.controller_class)
     rtf = spec.real_time_factor
-    args = {'world': world, 'robot': spec.robot, 'camera': p.sim_params['camera'], 'lockstep': rtf is None,
+    args = {'world': world, 'robot': p.profile.name, 'camera': p.sim_params['camera'], 'lockstep': rtf is None,
             'command_delay': spec.command_delay_s,
             'time_limit': judge.time_limit, 'end_on_contact': judge.end_on_contact,
             'end_at_rest': c.get('end_at_rest', judge.end_at_rest), 'success_radius': judge.success_radius,

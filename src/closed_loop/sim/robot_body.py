@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from closed_loop.sim.quiet import import_pybullet, native_output
 from closed_loop.sim import drive
 from closed_loop.sim.contact_room import BodyExtent, ContactRoom
-from closed_loop import robot_model
+from closed_loop import description, robot_model
 from closed_loop.geometry import quaternion_yaw, yaw_quaternion
 
 pybullet = import_pybullet()
@@ -84,9 +84,10 @@ class Robot:
     def _build(self):
         p = pybullet
         start = self.start
-        # pybullet reads URDF from a file only; the text (robot_description) is the source.
+        # pybullet reads URDF from a file only; the text (robot_description) is the source, its meshes' package://
+        # made paths.
         with tempfile.NamedTemporaryFile('w', suffix='.urdf', prefix='closed_loop-robot-') as urdf_file:
-            urdf_file.write(self.model.urdf_text)
+            urdf_file.write(description.for_pybullet(self.model.urdf_text, self.model.source))
             urdf_file.flush()
             with native_output():       # pybullet's importer warns on stdout (a link with no inertia)
                 self.robot_id = self._call(p.loadURDF, urdf_file.name,
@@ -105,9 +106,11 @@ class Robot:
         self._wheels = self._left_wheels + self._right_wheels
         self._call(p.changeDynamics, self.robot_id, -1, mass=ROOT_LINK_MASS_KG,
                    localInertiaDiagonal=[ROOT_LINK_INERTIA_KGM2] * 3)
-        base_link = self._links[names.body_link]
-        self._call(p.changeDynamics, self.robot_id, base_link, lateralFriction=CASTER_LATERAL_FRICTION,
-                   spinningFriction=0.0, rollingFriction=0.0)
+        # The body slides where it touches the ground (a caster), and so does a caster on a link of its own,
+        # fixed to the body.
+        for link in self._fixed_to(names.body_link):
+            self._call(p.changeDynamics, self.robot_id, link, lateralFriction=CASTER_LATERAL_FRICTION,
+                       spinningFriction=0.0, rollingFriction=0.0)
         for wheel in self._wheels:
             # Anisotropic friction is in the wheel link's frame, whose y is the axle in the package's URDFs.
             self._call(p.changeDynamics, self.robot_id, wheel, lateralFriction=WHEEL_LATERAL_FRICTION,
@@ -118,6 +121,20 @@ class Robot:
         self.ray_mask = ALL_GROUPS & ~own
         if names.scan_frame in self._links:
             self._call(p.setCollisionFilterGroupMask, self.robot_id, self._links[names.scan_frame], own, ALL_GROUPS)
+
+    def _fixed_to(self, link_name):
+        """The pybullet indices of link ``link_name`` and of the links fixed below it (by fixed joints only)."""
+        found, todo = [], [self._links[link_name]]
+        children = {}
+        for index in self._links.values():
+            info = self._call(pybullet.getJointInfo, self.robot_id, index)
+            if info[2] == pybullet.JOINT_FIXED:
+                children.setdefault(info[16], []).append(index)
+        while todo:
+            link = todo.pop()
+            found.append(link)
+            todo.extend(children.get(link, ()))
+        return found
 
     def cast_rays(self, ray_from, ray_to):
         """:meth:`Simulation.cast_rays` for this robot's sensors: its own LIDAR housing is left out."""
