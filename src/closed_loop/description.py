@@ -52,7 +52,8 @@ def resolve(reference, source, base_dir=None, package_relative=False):
     for pattern in (FIND, PACKAGE_URI):
         match = pattern.match(reference)
         if match:
-            return os.path.normpath(package_path(match.group(1), source) + (match.group(2) or ''))
+            return inside(package_path(match.group(1), source), (match.group(2) or '').lstrip('/'), reference,
+                          source)
     if reference.startswith('file://'):
         return os.path.normpath(reference[len('file://'):])
     if os.path.isabs(reference):
@@ -61,8 +62,16 @@ def resolve(reference, source, base_dir=None, package_relative=False):
         return os.path.normpath(os.path.join(base_dir, reference))
     if package_relative and '/' in reference and not os.path.exists(reference):
         package, _, rest = reference.partition('/')
-        return os.path.join(package_path(package, source), rest)
+        return inside(package_path(package, source), rest, reference, source)
     return os.path.abspath(reference)
+
+
+def inside(folder, rest, reference, source):
+    """``folder/rest``, refused if ``rest`` leads out of ``folder`` (``..``)."""
+    path = os.path.normpath(os.path.join(folder, rest))
+    if path != folder and not path.startswith(folder.rstrip(os.sep) + os.sep):
+        raise DescriptionError('%s: %s leads out of its package (%s)' % (source, reference, folder))
+    return path
 
 
 def expand(path, args=None):

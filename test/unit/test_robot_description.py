@@ -148,6 +148,13 @@ def test_a_relative_mesh_a_xacro_error_and_a_profile_without_description_are_ref
     refused(folder, "description: expected a mapping with 'file'")
 
 
+def test_a_path_out_of_its_package_is_refused():
+    for reference in ('$(find fixture_robot_description)/../fixture_controllers/package.xml',
+                      'package://fixture_robot_description/../../x.stl', 'fixture_robot_description/../x.yaml'):
+        with pytest.raises(description.DescriptionError, match='leads out of its package'):
+            description.resolve(reference, 'here', package_relative=True)
+
+
 def test_a_description_that_cannot_drive_says_so(tmp_path):
     folder = copy_package(tmp_path)
     use_copy(folder)

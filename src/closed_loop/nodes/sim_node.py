@@ -130,6 +130,8 @@ class SimNode:
         self.sim = Simulation(world, self.settings, robots=setups)
         self.launch_nodes = sim_lockstep.LaunchNodes(self.scheduling.lockstep_watchers) if self.scheduling.lockstep else None
         self.ports = [RobotPort(self, index, setup, SENSORS) for index, setup in enumerate(setups)]
+        if world.left_out:
+            rospy.logwarn('sim_node: world %s: left out or approximated: %s', path, '; '.join(world.left_out))
         rospy.loginfo('sim_node: world %r from %s; %s; real_time_factor %g', world.name, path,
                       '; '.join(port.describe() for port in self.ports), self.scheduling.real_time_factor)
         self._lock = threading.Lock()

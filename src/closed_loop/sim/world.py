@@ -18,20 +18,19 @@ profile and start::
       - {name: r1, profile: closed_loop, start: {x: 0.0, y: 0.0, yaw: 0.0}}
       - {name: r2, profile: burger, start: {x: 4.0, y: 0.0, yaw: 3.14159}}
 
-Validation is strict because a typo in a world file otherwise shows up as a robot that behaves
-oddly: unknown keys, duplicate keys, non-finite numbers and numbers given as strings or booleans are
-all errors. Every error is a :class:`WorldError` whose message names the file, the field and what
-was expected.
-
-This module is ROS-free: it needs only the standard library and PyYAML.
+Validation is strict (a typo otherwise shows up as a robot that behaves oddly): unknown or duplicate keys,
+non-finite numbers and numbers given as strings or booleans are errors, each a :class:`WorldError` naming the
+file, the field and what was expected. A map_server map and a Gazebo world are worlds too (load_world).
+ROS-free: the standard library and PyYAML.
 """
+import dataclasses
 import math
 import os
 from dataclasses import dataclass
 from typing import Optional, Tuple
 
 from closed_loop.geometry import Pose2D  # noqa: F401  (a world's start and goal poses; closed_loop.sim.world.Pose2D)
-from closed_loop.sim import occupancy_map, shapes
+from closed_loop.sim import gazebo_world, occupancy_map, shapes
 from closed_loop.sim.world_robots import RobotSpec, check_robots_apart, check_start, parse_robots
 from closed_loop.yaml_check import Checker, FileError, load_yaml, read_text
 
@@ -130,6 +129,8 @@ class World:
     robots: Tuple[RobotSpec, ...] = ()
     #: Where a navigator should go (x, y in the world frame, m), if the world says (``goal:``); None if not.
     goal: Optional[Tuple[float, float]] = None
+    #: What a world of another kind (a Gazebo world) had that is left out or approximated (closed_loop.sim.gazebo_world).
+    left_out: Tuple[str, ...] = ()
 
 
 # --- parsing -----------------------------------------------------------------------------------
@@ -355,6 +356,9 @@ def load_world(path, footprint=None, check_starts=True):
     """
     path = os.fspath(path)
     text = read_text(path, MAX_WORLD_FILE_BYTES, WorldError, 'world file')
+    if gazebo_world.is_gazebo_world(path):      # its static shapes, the robot at its origin
+        data, left_out = gazebo_world.world_data(path, text, WorldError)
+        return dataclasses.replace(parse_world(data, path, footprint, check_starts), left_out=left_out)
     data = load_yaml(text, path, WorldError)
     if occupancy_map.is_map(data):          # a map_server map as it is: its cells, the robot at its origin
         data = {'name': os.path.splitext(os.path.basename(path))[0], 'map': {'file': os.path.abspath(path)},

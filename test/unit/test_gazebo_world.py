@@ -1,0 +1,194 @@
+"""A Gazebo world as a world: boxes, cylinders, a sphere, a mesh, a nested model and an included one (found on
+GAZEBO_MODEL_PATH), poses composed; what is left out named; the same scan to the bit as the same world written
+in this package's YAML; faulty worlds refused in one line."""
+import math
+import os
+import shutil
+
+import numpy
+import pytest
+import yaml
+
+from closed_loop.sim.sensors.lidar import Lidar, LidarSettings
+from closed_loop.sim.simulation import RobotSetup, SimSettings, Simulation
+from closed_loop.sim.world import WorldError, load_world
+
+CHASSIS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'fixtures',
+                       'fixture_robot_description', 'meshes', 'chassis.stl')
+
+POST = '''<?xml version="1.0"?>
+<sdf version="1.6">
+  <model name="post">
+    <static>true</static>
+    <link name="link">
+      <pose>0 0 0.5 0 0 0</pose>
+      <collision name="collision"><geometry><cylinder><radius>0.1</radius><length>1.0</length></cylinder></geometry></collision>
+      <visual name="visual"><geometry><cylinder><radius>0.1</radius><length>1.0</length></cylinder></geometry></visual>
+    </link>
+  </model>
+</sdf>
+'''
+CRATE = '''<?xml version="1.0"?>
+<sdf version="1.6">
+  <model name="crate">
+    <static>true</static>
+    <link name="link">
+      <collision name="collision"><pose>0 0 0.05 0 0 0</pose>
+        <geometry><mesh><uri>model://crate/meshes/crate.stl</uri><scale>2 1 1</scale></mesh></geometry></collision>
+    </link>
+  </model>
+</sdf>
+'''
+CONFIG = '<?xml version="1.0"?><model><name>%s</name><sdf version="1.6">model.sdf</sdf></model>\n'
+
+#: The world's shapes that stand upright (its boxes, cylinders, the nested model and the included post).
+UPRIGHT = '''
+    <model name="wall">
+      <static>true</static>
+      <pose>3 0 0.5 0 0 0</pose>
+      <link name="link">
+        <collision name="collision"><geometry><box><size>0.2 4 1</size></box></geometry></collision>
+        <visual name="visual"><geometry><box><size>0.2 4 1</size></box></geometry></visual>
+      </link>
+    </model>
+    <model name="barrel">
+      <static>true</static>
+      <pose>1.5 -1 0.25 0 0 0</pose>
+      <link name="link"><collision name="c"><geometry><cylinder><radius>0.25</radius><length>0.5</length></cylinder></geometry></collision></link>
+    </model>
+    <model name="table">
+      <static>true</static>
+      <pose>1 1.5 0 0 0 0</pose>
+      <model name="leg">
+        <pose>0.5 0.25 0 0 0 0</pose>
+        <link name="link">
+          <pose>0 0 0.375 0 0 0</pose>
+          <collision name="c"><geometry><box><size>0.1 0.1 0.75</size></box></geometry></collision>
+        </link>
+      </model>
+    </model>
+    <include>
+      <uri>model://post</uri>
+      <name>post_a</name>
+      <pose>2 -1.5 0 0 0 0</pose>
+    </include>
+'''
+YAML_WORLD = {'name': 'same', 'obstacles': [
+    {'name': 'wall/link/collision', 'type': 'box', 'position': [3.0, 0.0, 0.5], 'size': [0.2, 4.0, 1.0], 'yaw': 0.0},
+    {'name': 'barrel/link/c', 'type': 'cylinder', 'position': [1.5, -1.0, 0.25], 'radius': 0.25, 'height': 0.5},
+    {'name': 'table/leg/link/c', 'type': 'box', 'position': [1.5, 1.75, 0.375], 'size': [0.1, 0.1, 0.75],
+     'yaw': 0.0},
+    {'name': 'post_a/link/collision', 'type': 'cylinder', 'position': [2.0, -1.5, 0.5], 'radius': 0.1,
+     'height': 1.0}]}
+EXTRAS = '''
+    <include><uri>model://ground_plane</uri></include>
+    <include><uri>model://sun</uri></include>
+    <include><uri>model://crate</uri><pose>-2 0 0 0 0 0.5</pose></include>
+    <include><uri>model://nowhere_to_be_found</uri></include>
+    <model name="ball">
+      <static>true</static>
+      <link name="link"><pose>-1 2 0.3 0 0 0</pose><collision name="c"><geometry><sphere><radius>0.3</radius></sphere></geometry></collision></link>
+    </model>
+    <model name="ramp">
+      <static>true</static>
+      <pose>-1 -2 0.2 0.3 0 0</pose>
+      <link name="link"><collision name="c"><geometry><box><size>1 1 0.1</size></box></geometry></collision></link>
+    </model>
+    <plugin name="clock_plugin" filename="libgazebo_ros_init.so"/>
+    <actor name="walker"><skin><filename>walk.dae</filename></skin></actor>
+'''
+
+
+def world_file(folder, models, name='test.world'):
+    path = folder / name
+    path.write_text('<?xml version="1.0"?>\n<sdf version="1.6">\n  <world name="test">%s  </world>\n</sdf>\n' % models)
+    return str(path)
+
+
+@pytest.fixture
+def model_path(tmp_path, monkeypatch):
+    models = tmp_path / 'models'
+    for name, sdf in (('post', POST), ('crate', CRATE)):
+        (models / name).mkdir(parents=True)
+        (models / name / 'model.config').write_text(CONFIG % name)
+        (models / name / 'model.sdf').write_text(sdf)
+    (models / 'crate' / 'meshes').mkdir()
+    shutil.copy(CHASSIS, str(models / 'crate' / 'meshes' / 'crate.stl'))
+    monkeypatch.setenv('GAZEBO_MODEL_PATH', str(tmp_path / 'elsewhere') + os.pathsep + str(models))
+    return models
+
+
+def test_the_shapes_stand_where_their_composed_poses_put_them(tmp_path, model_path):
+    world = load_world(world_file(tmp_path, UPRIGHT + EXTRAS))
+    by_name = {o.name: o for o in world.obstacles}
+    assert set(by_name) == {'wall/link/collision', 'barrel/link/c', 'table/leg/link/c', 'post_a/link/collision',
+                            'crate/link/collision', 'ball/link/c', 'ramp/link/c'}
+    assert by_name['table/leg/link/c'].position == (1.5, 1.75, 0.375)      # model, nested model, link
+    assert by_name['post_a/link/collision'].position == (2.0, -1.5, 0.5) and by_name['post_a/link/collision'].radius == 0.1
+    # The mesh (an STL 0.36 x 0.26 x 0.1, scaled 2 x 1 x 1), turned 0.5 rad: the upright box round it, turned too.
+    crate = by_name['crate/link/collision']
+    assert crate.shape == 'box' and crate.yaw == pytest.approx(0.5)
+    assert crate.size == pytest.approx((0.72, 0.26, 0.1), abs=2e-4) and crate.position == pytest.approx((-2, 0, 0.05))
+    ball = by_name['ball/link/c']                                       # a sphere: the cylinder round it
+    assert (ball.shape, ball.radius, ball.size[2], ball.position) == ('cylinder', 0.3, 0.6, (-1.0, 2.0, 0.3))
+    ramp = by_name['ramp/link/c']                                       # tilted 0.3 rad about x: the box round it
+    assert ramp.size == pytest.approx((1.0, math.cos(0.3) + 0.1 * math.sin(0.3), math.sin(0.3) + 0.1 * math.cos(0.3)))
+    left = '; '.join(world.left_out)
+    for said in ('plugin clock_plugin', 'actor walker', 'model://nowhere_to_be_found: model not found on '
+                 'GAZEBO_MODEL_PATH', 'ball/link/c: a sphere', 'crate/link/collision: a mesh',
+                 'ramp/link/c: a tilted box'):
+        assert said in left, left
+    assert 'ground_plane' not in left and 'sun' not in left
+
+
+def test_the_same_world_in_yaml_gives_the_same_scan_to_the_bit(tmp_path, model_path):
+    yaml_path = tmp_path / 'same.yaml'
+    yaml_path.write_text(yaml.safe_dump(YAML_WORLD))
+    scans = []
+    for path in (world_file(tmp_path, UPRIGHT), str(yaml_path)):
+        world = load_world(path)
+        settings = SimSettings()
+        sim = Simulation(world, settings, robots=[RobotSetup('', settings, None, world.robot_start)])
+        try:
+            for caster in ('planar', 'pybullet'):
+                view = sim.view(0)
+                scans.append(Lidar(LidarSettings(scan_samples=720, ray_caster=caster), view).sample(view))
+        finally:
+            sim.close()
+    gazebo_planar, gazebo_bullet, yaml_planar, yaml_bullet = scans
+    assert numpy.array_equal(gazebo_planar, yaml_planar) and numpy.array_equal(gazebo_bullet, yaml_bullet)
+    assert numpy.isfinite(gazebo_planar).sum() > 100          # (it sees the wall, the barrel, the post)
+
+
+@pytest.mark.parametrize('world, message', [
+    ('<sdf><world name="w"><model name="m">', "expected SDF (XML), got 'XML that does not parse (no element found"),
+    ('<sdf><model name="m"/></sdf>', 'expected an SDF world (<sdf><world>...), got'),
+    ('<sdf><world name="w"><model name="m"><link name="l"><collision name="c"><geometry><box><size>1 0 1</size>'
+     '</box></geometry></collision></link></model></world></sdf>', "m/l/c: box geometry with its sizes as numbers > 0, "
+                                                                   "got '<box><size>1 0 1</size></box>'"),
+    ('<sdf><world name="w"><model name="m"><pose>1 2 nan 0 0 0</pose></model></world></sdf>',
+     "m: a pose of six finite numbers (x y z roll pitch yaw), got '1 2 nan 0 0 0'"),
+    ('<sdf><world name="w"><include><uri>model://../models/post</uri></include></world></sdf>',
+     'expected a model inside its folder on GAZEBO_MODEL_PATH'),
+])
+def test_a_faulty_world_is_refused_in_one_line(tmp_path, model_path, world, message):
+    path = tmp_path / 'bad.world'
+    path.write_text(world)
+    with pytest.raises(WorldError) as error:
+        load_world(str(path))
+    assert str(error.value).startswith(str(path) + ': (Gazebo world): ') and message in str(error.value)
+    assert '\n' not in str(error.value)
+
+
+def test_a_model_that_includes_itself_and_a_world_of_a_hundred_thousand_models_are_refused(tmp_path, model_path):
+    (model_path / 'post' / 'model.sdf').write_text(POST.replace('</model>', '<include><uri>model://post</uri>'
+                                                                            '</include></model>'))
+    with pytest.raises(WorldError, match='includes nested at most 16 deep'):
+        load_world(world_file(tmp_path, '<include><uri>model://post</uri></include>'))
+    many = ''.join('<model name="m%d"><static>true</static><link name="l"><collision name="c"><geometry><box>'
+                   '<size>1 1 1</size></box></geometry></collision></link></model>' % i for i in range(100000))
+    with pytest.raises(WorldError, match='bytes'):
+        load_world(world_file(tmp_path, many, 'many.world'))
+    few_thousand = many[:many.index('<model name="m2500">')]
+    with pytest.raises(WorldError, match='at most 2000 shapes'):
+        load_world(world_file(tmp_path, few_thousand, 'thousands.world'))
