@@ -12,8 +12,6 @@ import os
 import re
 import xml.etree.ElementTree as ET
 
-from closed_loop.robot_model import RobotModelError
-
 #: A description (URDF, or the xacro that makes it) larger than this is refused (bytes).
 MAX_DESCRIPTION_BYTES = 4 * 1024 * 1024
 #: A mesh larger than this is refused (bytes): a collision mesh is a few hundred kB; a scan of a real robot
@@ -24,8 +22,9 @@ FIND = re.compile(r'^\$\(find ([A-Za-z0-9_]+)\)(/.*)?$')
 PACKAGE_URI = re.compile(r'^package://([A-Za-z0-9_]+)(/.*)?$')
 
 
-class DescriptionError(RobotModelError):
-    """A robot description or one of its meshes is unusable; the message names the file and what is wrong."""
+class DescriptionError(ValueError):
+    """A robot description (its URDF or xacro, a mesh, what the simulator relies on in it) is unusable; the
+    message names the source and what is wrong. ``closed_loop.robot_model.RobotModelError`` is this class."""
 
 
 @functools.lru_cache(maxsize=None)

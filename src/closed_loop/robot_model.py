@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from closed_loop import description
 from closed_loop.geometry import Pose2D, matrix_quaternion
 
 #: The default robot's names (urdf/closed_loop.urdf). A robot profile (config/robots/<name>.yaml) names its own
@@ -26,8 +27,9 @@ CAMERA_OPTICAL_FRAME = 'camera_optical_frame'
 WHEEL_JOINT_TYPES = ('continuous', 'revolute')
 
 
-class RobotModelError(ValueError):
-    """The URDF lacks something the simulator relies on; the message names the source and element."""
+#: The URDF lacks something the simulator relies on (or a mesh of it is unusable); the message names the source
+#: and element.
+RobotModelError = description.DescriptionError
 
 
 @dataclass(frozen=True)
@@ -99,7 +101,6 @@ def load_robot_model(urdf, names=RobotNames(), source=None):
 def _robot_model(urdf, names, source):
     source = source or 'robot_description'
     if '<mesh' in urdf:                     # every mesh there and usable before anything runs
-        from closed_loop import description
         description.meshes(urdf, source)
     root, poses = link_transforms(urdf, names.base_frame, source)
     joints = {j.get('name'): j for j in root.findall('joint')}
@@ -235,7 +236,6 @@ def _shape_corners(geometry, source):
     box, cylinder, sphere = geometry.find('box'), geometry.find('cylinder'), geometry.find('sphere')
     mesh = geometry.find('mesh')
     if mesh is not None:
-        from closed_loop import description
         return description.mesh_points(*description.mesh_file(mesh, source))
     if box is not None:
         hx, hy, hz = (0.5 * float(v) for v in box.get('size').split())

@@ -1,5 +1,5 @@
 """BARN-method worlds (closed_loop.sim.barn), the footprint lattice that guarantees their way
-(closed_loop.lattice), their difficulty metrics, and the generators' table and command."""
+(closed_loop.sim.lattice), their difficulty metrics, and the generators' table and command."""
 import math
 import os
 from types import SimpleNamespace
@@ -9,7 +9,7 @@ import pytest
 import yaml
 
 from closed_loop.batch.episode import EpisodeError, EpisodeSpec, load_episode_world
-from closed_loop.lattice import STEPS, FootprintLattice
+from closed_loop.sim.lattice import STEPS, FootprintLattice
 from closed_loop.sim import barn, barn_metrics, generators
 from closed_loop.sim.planar_rays import PlanarRays
 from closed_loop.sim.profiles import load_profile

@@ -108,6 +108,64 @@ def test_only_the_nodes_import_ros_and_the_control_cores_never_the_simulator():
     assert not wrong, '\n'.join(wrong)
 
 
+def import_graph():
+    """{module: the package's modules it imports, at any depth of its code (a function's imports too)}."""
+    everything = modules()
+    graph = {}
+    for module, path in everything.items():
+        found = set()
+        for name in imports(module, path):
+            while name and name not in everything:        # 'closed_loop.sim.world.load_world' -> its module
+                name = name.rpartition('.')[0]
+            if name and name != module:
+                found.add(name)
+        graph[module] = found
+    return graph
+
+
+def import_circles(graph):
+    """The circles of ``graph`` ({node: its successors}): each strongly connected set of more than one module
+    (Tarjan's), as sorted lists."""
+    graph = {m: {n for n in found if n in graph} for m, found in graph.items()}
+    index, low, stack, on, circles = {}, {}, [], set(), []
+
+    def visit(node):
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        on.add(node)
+        for successor in graph[node]:
+            if successor not in index:
+                visit(successor)
+                low[node] = min(low[node], low[successor])
+            elif successor in on:
+                low[node] = min(low[node], index[successor])
+        if low[node] == index[node]:
+            part = []
+            while True:
+                member = stack.pop()
+                on.discard(member)
+                part.append(member)
+                if member == node:
+                    break
+            if len(part) > 1:
+                circles.append(sorted(part))
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return circles
+
+
+def test_no_modules_import_each_other_in_a_circle():
+    """Not even through an import inside a function: a circle means two modules that are one thing, or a thing
+    that belongs in a third."""
+    assert import_circles(import_graph()) == [], import_circles(import_graph())
+
+
+def test_a_circle_is_seen():
+    assert import_circles({'a': {'b'}, 'b': {'c'}, 'c': {'a'}, 'd': {'a'}}) == [['a', 'b', 'c']]
+    assert import_circles({'a': {'b'}, 'b': set()}) == []
+
+
 def test_the_layering_is_seen_by_the_checks():
     """The checks above can fail: a control module importing the simulator, and a core importing rospy,
     are caught."""

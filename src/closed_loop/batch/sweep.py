@@ -20,6 +20,7 @@ import argparse
 import csv
 import dataclasses
 import json
+import logging
 import math
 import os
 import sys
@@ -117,6 +118,12 @@ def read_rows(path):
 
 
 def _client(scheduler, workers):
+    if not quiet.verbose():
+        # Dask's own warnings (a worker "still alive after 4.0 seconds, killing" after Ctrl-C, a task "ended with
+        # CancelledError") are not the sweep's: only its errors are shown, here and in the workers (which read
+        # Dask's configuration from the environment), as pybullet's output is (--verbose shows them).
+        os.environ['DASK_LOGGING__DISTRIBUTED'] = 'error'
+        logging.getLogger('distributed').setLevel(logging.ERROR)
     import distributed
     if scheduler:
         return distributed.Client(scheduler, timeout='20s'), None
@@ -124,7 +131,8 @@ def _client(scheduler, workers):
     # not each started afresh ("spawn", Dask's default): measured on 2 cores, a sweep of two short episodes took
     # 10.2 CPU-s and 6.7 s with spawn, 7.0 CPU-s and 5.0 s with forkserver.
     import dask
-    dask.config.set({'distributed.worker.multiprocessing-method': 'forkserver'})
+    dask.config.set({'distributed.worker.multiprocessing-method': 'forkserver',
+                     'distributed.worker.preload': ['closed_loop.batch.local_worker']})
     cluster = distributed.LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                                        processes=True, host='127.0.0.1', dashboard_address=None)
     return distributed.Client(cluster), cluster

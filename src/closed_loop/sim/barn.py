@@ -13,7 +13,7 @@ The rule (:func:`generate`), all drawn from one ``numpy`` generator seeded with 
 3. Four walls round the whole way, a metre behind the start to a metre past the goal (the field cannot be gone
    round), the goal ``goal_distance`` ahead.
 4. The guarantee: the robot's footprint rectangle, grown by ``margin``, must get from the start to the goal
-   on the footprint lattice (``closed_loop.lattice``: 8 headings, moving along its heading, turning in place
+   on the footprint lattice (``closed_loop.sim.lattice``: 8 headings, moving along its heading, turning in place
    only where the turn's sweep is free). A field that fails it is drawn again (the next attempt), up to
    ``MAX_ATTEMPTS``.
 
@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy
 
-from closed_loop.lattice import FootprintLattice
+from closed_loop.sim.lattice import FootprintLattice
 from closed_loop.sim.profiles import load_profile
 
 BIRTH, SURVIVAL = 5, 4
@@ -129,7 +129,7 @@ class Layout:
         return grid
 
     def lattice(self, field, profile):
-        """(the :class:`closed_loop.lattice.FootprintLattice` of ``field`` for ``profile``'s footprint, the row
+        """(the :class:`closed_loop.sim.lattice.FootprintLattice` of ``field`` for ``profile``'s footprint, the row
         offset of this layout's rows in it): the side walls are a row of occupied cells beyond each side."""
         grid = numpy.pad(self.occupancy(field), ((1, 1), (0, 0)), constant_values=True)
         return FootprintLattice(grid, self.step, profile.footprint, self.settings.margin,
