@@ -12,8 +12,9 @@ cd "$root"
 # each by its rosdep key (test/unit/test_packaging.py keeps the lists together).
 APT_PACKAGES=(
   catkin python3-catkin-pkg python3-setuptools python3-venv python3-pip python3-pytest python3-yaml
-  python3-rospy python3-rostest python3-rosbag python3-roslaunch python3-rosmaster python3-rosnode python3-rostopic
-  python3-rosservice python3-rosparam python3-rosmsg python3-rosgraph-msgs python3-tf2-ros python3-tf2-msgs
+  python3-rospy python3-rosgraph python3-rospkg python3-rostest python3-rosbag python3-roslaunch python3-rosmaster
+  python3-rosnode python3-rostopic python3-rosservice python3-rosparam python3-rosmsg python3-rosgraph-msgs
+  python3-tf2-ros python3-tf2-msgs
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
   python3-visualization-msgs python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs

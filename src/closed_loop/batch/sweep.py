@@ -119,10 +119,9 @@ def read_rows(path):
 
 def _client(scheduler, workers):
     if not quiet.verbose():
-        # Dask's own warnings (a worker "still alive after 4.0 seconds, killing" after Ctrl-C, a task "ended with
-        # CancelledError") are not the sweep's: only its errors are shown, here and in the workers (which read
-        # Dask's configuration from the environment), as pybullet's output is (--verbose shows them).
-        os.environ['DASK_LOGGING__DISTRIBUTED'] = 'error'
+        # Dask's own warnings (a worker "still alive after 4.0 seconds, killing" after Ctrl-C) are not the
+        # sweep's: only its errors are shown, here and (local_worker) in the local workers, as pybullet's output
+        # is (--verbose shows them).
         logging.getLogger('distributed').setLevel(logging.ERROR)
     import distributed
     if scheduler:
@@ -134,7 +133,7 @@ def _client(scheduler, workers):
     dask.config.set({'distributed.worker.multiprocessing-method': 'forkserver',
                      'distributed.worker.preload': ['closed_loop.batch.local_worker']})
     cluster = distributed.LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                       processes=True, host='127.0.0.1', dashboard_address=None)
+                                       processes=True, host='127.0.0.1', dashboard_address='127.0.0.1:0')
     return distributed.Client(cluster), cluster
 
 
