@@ -28,7 +28,6 @@ HOLD_TOLERANCE_RAD = math.radians(10.0)
 PASSED_BY_M = 3.0
 HOLD_WINDOW_M = 0.5
 GOAL_RADIUS_M = 0.4
-AT_REST_MPS = 0.01
 
 
 def _yaw(odometry):
@@ -90,7 +89,7 @@ class Avoid(unittest.TestCase):
             self.assertIn(NavState.RECOVERING.name, seen)
             if seen[-1] == NavState.FAILED.name:
                 harness.sim_sleep(1.0)
-                self.assertLess(abs(truth.wait().twist.twist.linear.x), AT_REST_MPS)
+                self.assertLess(abs(truth.wait().twist.twist.linear.x), harness.REST_SPEED_MPS)
         if hold_after_x is not None:
             begin, end = hold_after_x + passed_by, hold_after_x + passed_by + window
             xs = [m.pose.pose.position.x for m in truth.all]

@@ -16,24 +16,24 @@ import harness  # noqa: E402
 RECKLESS_MPS = 1.0
 # After the robot has driven and come to rest, it is watched this long (simulated s) for a late contact.
 WATCH_AT_REST_S = 3.0
-AT_REST_MPS = 0.02
 
 
 class GuardReckless(unittest.TestCase):
     def test_reckless_controller_touches_nothing(self):
         rospy.init_node('guard_reckless_test')
         truth = harness.GroundTruth()
+        judged = harness.Judged()
         contacts = harness.contact_count_topic()
         unguarded = harness.Latest('cmd_vel_unguarded', Twist)
         verdicts = harness.Latest('cmd_vel_guard/verdict', String, keep_all=True)
         truth.wait(predicate=lambda m: m.twist.twist.linear.x > 0.5 * RECKLESS_MPS)
         # Driving; now wait for rest (the guard's doing: the controller never asks for less).
-        truth.wait(timeout_s=60.0, predicate=lambda m: abs(m.twist.twist.linear.x) < AT_REST_MPS
-                   and m.pose.pose.position.x > 1.0)
+        rest = judged.rest(timeout_s=60.0)
+        self.assertGreater(rest.final_pose[0], 1.0, rest.why)
         harness.sim_sleep(WATCH_AT_REST_S)
         self.assertAlmostEqual(unguarded.wait().linear.x, RECKLESS_MPS,
                                msg='the reckless controller stopped commanding 1 m/s')
-        self.assertLess(abs(truth.wait().twist.twist.linear.x), AT_REST_MPS, 'the robot moved on')
+        self.assertLess(abs(truth.wait().twist.twist.linear.x), harness.REST_SPEED_MPS, 'the robot moved on')
         self.assertIn('VETOED', [m.data for m in verdicts.all], 'the guard never vetoed')
         self.assertEqual(contacts.wait().data, 0, 'the robot touched an obstacle behind the guard')
 

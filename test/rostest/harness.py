@@ -9,8 +9,14 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 from std_msgs.msg import UInt32
 
+from closed_loop.batch.judge import Judge, JudgeSettings
+from closed_loop.geometry import quaternion_yaw
+from closed_loop.nodes.scenario_judge import COMMAND_FRESH_S
+
 # Bounds that only catch hangs; behaviour is asserted on values, not on wall-clock time.
 WAIT_FOR_TOPIC_S = 30.0
+#: At rest at an instant, as the judge of every episode has it (closed_loop.batch.judge): under this speed (m/s).
+REST_SPEED_MPS = JudgeSettings().rest_speed
 
 
 def output_dir(name):
@@ -76,3 +82,47 @@ def sim_sleep(seconds):
 
 def contact_count_topic():
     return Latest('contact_count', UInt32)
+
+
+class Judged:
+    """The judge of every episode and scenario (``closed_loop.batch.judge``) watching this graph from now on, so
+    that "came to rest" in a rostest is what it is in every verdict: ground truth under the judge's rest speed and
+    yaw rate, under a zero command, for its ``rest_hold``, after the robot was told to move (a command other than
+    zero since this watch began). ``namespace``: a robot's of a world of several (``/r1/``)."""
+
+    def __init__(self, namespace=''):
+        self._lock = threading.Lock()
+        self.judge = Judge(JudgeSettings(time_limit=1e9, end_at_rest=True, first_command_wait=1e9), None)
+        self._command = None
+        self._truth = None
+        rospy.Subscriber(namespace + 'cmd_vel', Twist, self._on_command, queue_size=10)
+        rospy.Subscriber(namespace + 'base_pose_ground_truth', Odometry, self._on_truth, queue_size=50)
+
+    def _on_command(self, msg):
+        with self._lock:
+            self._command = (msg.linear.x, msg.angular.z, rospy.get_time())
+            self.judge.on_command((msg.linear.x, msg.angular.z))
+
+    def _on_truth(self, msg):
+        t = msg.header.stamp.to_sec()
+        with self._lock:
+            self._truth = msg
+            if self.judge.due(t):
+                c = self._command
+                command = c[:2] if c is not None and t - c[2] <= COMMAND_FRESH_S else None
+                p, q = msg.pose.pose.position, msg.pose.pose.orientation
+                self.judge.observe(t, p.x, p.y, quaternion_yaw((q.x, q.y, q.z, q.w)), msg.twist.twist.linear.x,
+                                   msg.twist.twist.angular.z, command)
+
+    def rest(self, timeout_s=WAIT_FOR_TOPIC_S):
+        """Wait until the judge says the robot came to rest; its verdict (``time_s``: when it came to rest,
+        ``final_pose``: ground truth then). ``timeout_s``: wall time, a bound that catches hangs."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline and not rospy.is_shutdown():
+            with self._lock:
+                if self.judge.ended:
+                    p, q = self._truth.pose.pose.position, self._truth.pose.pose.orientation
+                    return self.judge.verdict(self._truth.header.stamp.to_sec(),
+                                              (p.x, p.y, quaternion_yaw((q.x, q.y, q.z, q.w))))
+            time.sleep(0.02)
+        raise AssertionError('the robot did not come to rest, as the judge has it, within %g s' % timeout_s)

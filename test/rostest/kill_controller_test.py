@@ -21,7 +21,6 @@ CMD_VEL_TIMEOUT_S = SimSettings().cmd_vel_timeout   # sim_node's defaults, from 
 MAX_LINEAR_ACCEL_MPS2 = SimSettings().max_linear_accel
 CONTROL_PERIOD_S = 1.0 / StopSettings().rate_hz  # the last command may be up to one period old at the kill
 SLACK_S = 0.15
-AT_REST_MPS = 0.01
 
 
 class KillController(unittest.TestCase):
@@ -39,7 +38,7 @@ class KillController(unittest.TestCase):
         after = [m for m in truth.all if m.header.stamp.to_sec() > deadline]
         self.assertTrue(after)
         for m in after:
-            self.assertLess(abs(m.twist.twist.linear.x), AT_REST_MPS,
+            self.assertLess(abs(m.twist.twist.linear.x), harness.REST_SPEED_MPS,
                             'moving %.3f s after the kill' % (m.header.stamp.to_sec() - killed))
         # And not earlier than the watchdog allows: it kept the last command until the timeout.
         early = [m for m in truth.all if killed < m.header.stamp.to_sec() < killed + CMD_VEL_TIMEOUT_S - CONTROL_PERIOD_S]

@@ -19,9 +19,7 @@ from closed_loop.control.decisions import StopSettings  # noqa: E402
 WALL_NEAR_FACE_X_M = 3.0     # worlds/wall.yaml; the LIDAR is at the robot's centre (urdf/closed_loop.urdf)
 SLOW_DISTANCE_M = StopSettings().slow_distance   # stop_on_obstacle's defaults, from their one source
 SLOW_SPEED_MPS = StopSettings().slow_speed
-AT_REST_MPS = 0.01
 SPEED_TOLERANCE_MPS = 0.05
-REST_FOR_S = 1.0             # simulated seconds at rest that count as "came to rest"
 # The body settles back by a fraction of a millimetre after braking.
 OVERSHOOT_TOLERANCE_M = 0.005
 CMD_RATE_HZ = 10.0
@@ -35,22 +33,15 @@ class LoopStop(unittest.TestCase):
         low = rospy.get_param('~min_clearance', 0.40)
         high = rospy.get_param('~max_clearance', 0.50)
         truth = harness.Latest('base_pose_ground_truth', harness.Odometry, keep_all=True)
+        judged = harness.Judged()
         cmds = []
         rospy.Subscriber('cmd_vel', Twist, lambda m: cmds.append((rospy.get_time(), m.linear.x)), queue_size=100)
         contacts = harness.Latest('contact_count', UInt32)
         red = harness.Latest('red_detected', Bool, keep_all=True)
         truth.wait()
-        # Wait until the robot has been at rest for REST_FOR_S after having moved (bounded by the time-limit).
-        while not rospy.is_shutdown():
-            rospy.sleep(0.2)
-            log = list(truth.all)
-            moved = [m for m in log if m.pose.pose.position.x > 1.0]
-            if moved:
-                t_end = log[-1].header.stamp.to_sec()
-                recent = [m for m in log if m.header.stamp.to_sec() > t_end - REST_FOR_S]
-                if all(abs(m.twist.twist.linear.x) < AT_REST_MPS for m in recent) and \
-                        recent[0].header.stamp.to_sec() <= t_end - REST_FOR_S + 0.05:
-                    break
+        # Until the judge says it came to rest (bounded by the test's time-limit).
+        rest = judged.rest(timeout_s=120.0)
+        self.assertEqual(rest.outcome, 'stopped', rest.why)
         rospy.sleep(2.0)  # more stopped-phase commands for the rate check
         log = list(truth.all)
 
@@ -69,21 +60,17 @@ class LoopStop(unittest.TestCase):
                if abs(m.twist.twist.linear.x - SLOW_SPEED_MPS) > SPEED_TOLERANCE_MPS]
         self.assertFalse(off, 'not at slow speed %g m/s in the band %g-0.55 m from the wall: %s'
                          % (SLOW_SPEED_MPS, slow_band_end, ', '.join(off[:10])))
-        final = clearance(log[-1])
+        final = WALL_NEAR_FACE_X_M - rest.final_pose[0]
         self.assertTrue(low <= final <= high, 'came to rest %.3f m from the wall, expected [%g, %g]'
                         % (final, low, high))
-        self.assertLess(abs(log[-1].twist.twist.linear.x), AT_REST_MPS)
+        self.assertLess(abs(log[-1].twist.twist.linear.x), harness.REST_SPEED_MPS, 'moved on after its rest')
         self.assertEqual(contacts.wait().data, 0, 'the robot touched something')
         self.assertGreater(min(clearance(m) for m in log), final - OVERSHOOT_TOLERANCE_M,
                            'the robot got closer than where it rested (overshoot and back?)')
 
-        # /cmd_vel at 10 Hz while moving and while stopped (rates over simulated time).
-        # Rest begins with the last run of at-rest ground truth.
-        rest_start = log[-1].header.stamp.to_sec()
-        for m in reversed(log):
-            if abs(m.twist.twist.linear.x) >= AT_REST_MPS:
-                break
-            rest_start = m.header.stamp.to_sec()
+        # /cmd_vel at 10 Hz while moving and while stopped (rates over simulated time), from when the judge says it
+        # came to rest.
+        rest_start = rest.time_s
         moving = [t for t, v in cmds if v > 0 and t < rest_start - 0.5]
         stopped = [t for t, v in cmds if v == 0.0 and t > rest_start + 0.2]
         for name, times in (('moving', moving), ('stopped', stopped)):

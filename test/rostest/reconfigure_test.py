@@ -26,8 +26,6 @@ NEW_STOP_DISTANCE_M = 0.8
 # Past the new stop distance by at most this (braking from slow speed within one control period).
 STOP_BAND_M = 0.10
 CHANGE_BEFORE_CLEARANCE_M = 2.0   # the change is made while the wall is farther than this
-AT_REST_MPS = 0.01
-REST_FOR_S = 1.0
 TOOL_TIMEOUT_S = 30.0
 
 
@@ -44,6 +42,7 @@ class Reconfigure(unittest.TestCase):
         warnings = []
         rospy.Subscriber('/rosout', Log, lambda m: warnings.append(m.msg) if m.level >= Log.WARN else None)
         truth = harness.GroundTruth()
+        judged = harness.Judged()
         contacts = harness.Latest('contact_count', UInt32)
         defaults = StopSettings()
         # A node serves ~set_parameters once it has written its effective parameters.
@@ -66,19 +65,10 @@ class Reconfigure(unittest.TestCase):
         self.assertIn("'stop_distance': %r" % NEW_STOP_DISTANCE_M, out)
         self.assertEqual(rospy.get_param('/stop_on_obstacle/stop_distance'), NEW_STOP_DISTANCE_M)
 
-        # Rest: ground truth at rest for REST_FOR_S of simulated time.
-        rest_since = None
-        while not rospy.is_shutdown():
-            m = truth.wait()
-            t = m.header.stamp.to_sec()
-            if abs(m.twist.twist.linear.x) < AT_REST_MPS and truth.xy()[0] > 1.0:
-                rest_since = t if rest_since is None else rest_since
-                if t - rest_since >= REST_FOR_S:
-                    break
-            else:
-                rest_since = None
-            rospy.sleep(0.1)
-        clearance = WALL_NEAR_FACE_X_M - truth.xy()[0]
+        # Until the judge says it came to rest.
+        rest = judged.rest(timeout_s=120.0)
+        self.assertEqual(rest.outcome, 'stopped', rest.why)
+        clearance = WALL_NEAR_FACE_X_M - rest.final_pose[0]
         self.assertTrue(NEW_STOP_DISTANCE_M - STOP_BAND_M <= clearance <= NEW_STOP_DISTANCE_M,
                         'rested %.3f m from the wall, expected %.2f-%.2f m'
                         % (clearance, NEW_STOP_DISTANCE_M - STOP_BAND_M, NEW_STOP_DISTANCE_M))

@@ -23,7 +23,6 @@ EXPECTED = {
                    range_min=0.1, range_max=30.0, scan_x=0.12, front_x=0.254),
 }
 WALL_FACE_X = 3.0  # worlds/wall.yaml: a 0.1 m wall centred at x = 3.05 m
-AT_REST_MPS = 0.01
 
 
 class RobotProfile(unittest.TestCase):
@@ -49,14 +48,14 @@ class RobotProfile(unittest.TestCase):
                                delta=0.02)
         self.assertTrue(all(math.isinf(r) or want['range_min'] <= r <= want['range_max'] for r in scan.ranges))
 
-        truth = harness.GroundTruth()
+        judged = harness.Judged()
         contacts = harness.contact_count_topic()
-        truth.wait(predicate=lambda m: m.twist.twist.linear.x > 0.1)
-        rest = truth.wait(timeout_s=60.0, predicate=lambda m: abs(m.twist.twist.linear.x) < AT_REST_MPS
-                          and m.pose.pose.position.x > 1.0)
-        front = rest.pose.pose.position.x + want['front_x']
+        verdict = judged.rest(timeout_s=60.0)
+        self.assertGreater(verdict.final_pose[0], 1.0, verdict.why)
+        rest_x = verdict.final_pose[0]
+        front = rest_x + want['front_x']
         self.assertGreater(WALL_FACE_X - front, 0.1, 'the body stopped %.3f m from the wall' % (WALL_FACE_X - front))
-        lidar_to_wall = WALL_FACE_X - (rest.pose.pose.position.x + want['scan_x'])
+        lidar_to_wall = WALL_FACE_X - (rest_x + want['scan_x'])
         self.assertLess(lidar_to_wall, 0.55, 'stopped %.2f m short of the stop zone' % lidar_to_wall)
         self.assertEqual(contacts.wait().data, 0)
 

@@ -29,7 +29,6 @@ CMD_VEL_TIMEOUT_S = SimSettings().cmd_vel_timeout        # sim_node's defaults, 
 MAX_LINEAR_ACCEL_MPS2 = SimSettings().max_linear_accel
 # Slack for the physics settling and the 50 Hz ground-truth period.
 STOP_SLACK_S = 0.15
-AT_REST_MPS = 0.01
 
 
 class SimContract(unittest.TestCase):
@@ -96,7 +95,7 @@ class SimContract(unittest.TestCase):
         harness.sim_sleep(0.3)
         x1, y1 = self.truth.xy()
         self.assertLess(math.hypot(x1 - x0, y1 - y0), 0.005)
-        self.assertLess(self.truth.speed(), AT_REST_MPS)
+        self.assertLess(self.truth.speed(), harness.REST_SPEED_MPS)
 
     def test_5_forward_moves_and_watchdog_stops(self):
         x0, _ = self.truth.xy()
@@ -110,7 +109,7 @@ class SimContract(unittest.TestCase):
         after = [m for m in log.all if m.header.stamp.to_sec() >= deadline]
         self.assertTrue(after, 'no ground truth after the stop deadline')
         for m in after:
-            self.assertLess(abs(m.twist.twist.linear.x), AT_REST_MPS,
+            self.assertLess(abs(m.twist.twist.linear.x), harness.REST_SPEED_MPS,
                             'still moving at t = %.3f, %.3f s after the last command'
                             % (m.header.stamp.to_sec(), m.header.stamp.to_sec() - last_command))
         # It did keep going until the watchdog: moving just before the timeout.

@@ -16,13 +16,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
 
 SPOOF_RATE_HZ = 20.0
-AT_REST_MPS = 0.02
 
 
 class SpoofedScan(unittest.TestCase):
     def test_second_scan_publisher_stops_the_robot(self):
         rospy.init_node('spoofer')
         truth = harness.GroundTruth()
+        judged = harness.Judged()            # (from the start: it sees the robot told to cruise)
         contacts = harness.contact_count_topic()
         errors = []
         rospy.Subscriber('/rosout', Log, lambda m: errors.append(m) if m.level >= Log.ERROR else None,
@@ -49,13 +49,13 @@ class SpoofedScan(unittest.TestCase):
         spoofer = threading.Thread(target=spoof, daemon=True)
         spoofer.start()
         try:
-            at_rest = truth.wait(timeout_s=20.0, predicate=lambda m: abs(m.twist.twist.linear.x) < AT_REST_MPS)
+            at_rest = judged.rest(timeout_s=20.0)
             # Stopped well before the wall (front face at x = 3.0 m): by the refusal, not by the wall.
-            self.assertLess(at_rest.pose.pose.position.x, 2.0,
+            self.assertLess(at_rest.final_pose[0], 2.0,
                             'with the spoofer running the robot drove on to x = %.2f m (spoofing began at %.2f m)'
-                            % (at_rest.pose.pose.position.x, x_spoof))
+                            % (at_rest.final_pose[0], x_spoof))
             harness.sim_sleep(3.0)
-            self.assertLess(abs(truth.wait().twist.twist.linear.x), AT_REST_MPS, 'moved while spoofed')
+            self.assertLess(abs(truth.wait().twist.twist.linear.x), harness.REST_SPEED_MPS, 'moved while spoofed')
         finally:
             stop.set()
             spoofer.join(2.0)
@@ -66,8 +66,8 @@ class SpoofedScan(unittest.TestCase):
                         % (me, [(m.name, m.msg) for m in errors][:5]))
         # With the spoofer gone, the controller trusts /scan again and stops at the wall as usual.
         truth.wait(predicate=lambda m: m.twist.twist.linear.x > 0.1)
-        truth.wait(timeout_s=30.0, predicate=lambda m: abs(m.twist.twist.linear.x) < AT_REST_MPS
-                   and m.pose.pose.position.x > 2.0)
+        at_wall = harness.Judged().rest(timeout_s=30.0)
+        self.assertGreater(at_wall.final_pose[0], 2.0, at_wall.why)
         self.assertEqual(contacts.wait().data, 0, 'the robot touched the wall')
 
 
