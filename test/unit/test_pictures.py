@@ -96,6 +96,14 @@ def test_the_page_escapes_what_it_shows_and_loads_nothing_from_elsewhere(tmp_pat
     assert text.index('rule: the rule') < text.index('<h2>Summary')
     assert 'src="pictures/episode-00000.png"' in text and 'episode-00001.png' not in text
     assert 'Not as meant (1)' in text
+    # The headline, then what did not go as meant, then the tables (a long one folded).
+    assert text.index('as meant: 50.0%') < text.index('Not as meant (1)') < text.index('<h2>Summary')
+    assert 'contacts: 1' in text and '<details><summary>' not in text.split('<h2>Summary')[1].split('<h2>')[0]
+    long_body = [[str(i), '1'] for i in range(300)]
+    report_page.write(str(page), sweep, rows, ['seed', 'episodes'], long_body, None,
+                      lambda i: str(tmp_path / 'pictures' / ('episode-%05d.png' % int(i))))
+    text = page.read_text()
+    assert '<details><summary>300 rows (open)</summary>' in text.split('<h2>Summary')[1]
 
 
 def test_a_graph_rerun_may_end_two_lidar_periods_of_its_top_speed_apart(crashed):

@@ -1,8 +1,9 @@
 """A sweep's page, ``report.html``: one self-contained file beside ``rows.csv`` that works from the folder,
 offline (no script, style or font from anywhere else; the pictures are files beside it), on a phone as on a
 wide screen. It shows, top to bottom: what was found (a recommendation and its rule, where the command made
-one), the outcomes, the summary table (sortable: click a column's heading), the plot, the failing episodes
-(a table of them, then each drawn one's picture with its result and spec), and the sweep file. Free of ROS.
+one), the headline (episodes, outcomes, success, contacts, time), what did not go as meant (a table of it, then
+each drawn episode's picture with its result and spec), the summary table (sortable: click a column's heading;
+folded when it is long), the plot, and the sweep file. Free of ROS.
 """
 import html
 import json
@@ -12,6 +13,8 @@ from closed_loop.batch.pictures import is_failure
 
 #: The failing episodes the page lists, at most (the rest are in rows.csv).
 MAX_LISTED = 1000
+#: A summary table longer than this (rows) is folded: the page opens on the headline and the failures.
+FOLD_ROWS = 20
 RESULT_FIELDS = ('outcome', 'time_s', 'min_clearance_m', 'contacts', 'final_x', 'final_y', 'final_yaw',
                  'goal_error_m', 'path_m', 'error', 'logs')
 
@@ -94,8 +97,21 @@ def _outcomes(rows):
     failing = sum(is_failure(r['outcome'], r.get('contacts')) for r in rows)
     spans = ''.join('<span%s>%s: %d</span>' % (' class="bad"' if outcome in ('collided', 'failed', 'timed_out', 'error')
                                                else '', _e(outcome), n) for outcome, n in sorted(counts.items()))
-    return '<p class="outcomes"><span>%d episodes</span>%s<span class="bad">not as meant: %d</span></p>' % (
-        len(rows), spans, failing)
+    contacts = sum(int(r.get('contacts') or 0) for r in rows if str(r.get('contacts') or '0').isdigit())
+    times = [float(r['time_s']) for r in rows if _number(r.get('time_s'))]
+    headline = '<span>as meant: %.1f%%</span><span%s>contacts: %d</span>' % (
+        100.0 * (len(rows) - failing) / len(rows) if rows else 0.0, ' class="bad"' if contacts else '', contacts)
+    if times:
+        headline += '<span>time: mean %.1f s, longest %.1f s</span>' % (sum(times) / len(times), max(times))
+    return '<p class="outcomes"><span>%d episodes</span>%s<span class="bad">not as meant: %d</span>%s</p>' % (
+        len(rows), spans, failing, headline)
+
+
+def _number(text):
+    try:
+        return float(text) == float(text)          # (not NaN)
+    except (TypeError, ValueError):
+        return False
 
 
 def _result(row):
@@ -123,10 +139,6 @@ def write(path, sweep, rows, header, body, plot_file, picture_of, preface=()):
     if preface:
         parts.append('<section class="preface" id="preface">%s</section>' % ''.join('<p>%s</p>' % _e(line) for line in preface))
     parts.append(_outcomes(rows))
-    parts.append('<h2>Summary</h2>' + _table(header, [[_e(c) for c in line] for line in body], 'summary'))
-    if plot_file and os.path.exists(plot_file):
-        parts.append('<h2>Plot</h2><img src="%s" alt="contact rate and least clearance against the grid" '
-                     'width="700" height="650">' % _e(os.path.relpath(plot_file, folder)))
     failing = sorted((r for r in rows if is_failure(r['outcome'], r.get('contacts'))), key=lambda r: int(r['index']))
     drawn = [r for r in (failing if sweep.report['pictures'] != 'all' else rows) if os.path.exists(picture_of(r['index']))]
     drawn_ids = {r['index'] for r in drawn}
@@ -152,6 +164,13 @@ def write(path, sweep, rows, header, body, plot_file, picture_of, preface=()):
                          _e(os.path.relpath(picture_of(r['index']), folder)), _e(r['index']),
                          _e(r['outcome']), _e(r['index']), _e(r.get('why') or r.get('error', '')), _result(r),
                          _e(_spec(r))))
+    summary = _table(header, [[_e(c) for c in line] for line in body], 'summary')
+    if len(body) > FOLD_ROWS:
+        summary = '<details><summary>%d rows (open)</summary>%s</details>' % (len(body), summary)
+    parts.append('<h2>Summary</h2>' + summary)
+    if plot_file and os.path.exists(plot_file):
+        parts.append('<h2>Plot</h2><img src="%s" alt="contact rate and least clearance against the grid" '
+                     'width="700" height="650">' % _e(os.path.relpath(plot_file, folder)))
     parts.append('<h2>The sweep</h2><pre>%s</pre>' % _e(getattr(sweep, 'text', '') or ''))
     parts.append('<script>%s</script></body></html>' % SCRIPT)
     tmp = path + '.tmp'

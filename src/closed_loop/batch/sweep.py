@@ -259,6 +259,10 @@ def _run_todo(todo, writing, progress, scheduler, workers):
             progress.update(result['outcome'])
             submit(1)
     finally:
+        if sys.exc_info()[0] is not None and not quiet.verbose():
+            # Interrupted (Ctrl-C, a full disk): the cluster goes down under running episodes, and Dask says so
+            # at every level; the sweep says what happened itself.
+            logging.getLogger('distributed').setLevel(logging.CRITICAL)
         for future in list(futures):
             future.cancel()
         client.close()
