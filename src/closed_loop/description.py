@@ -107,6 +107,8 @@ def _xacro(path, args):
         raise DescriptionError('%s: xacro: %s%s' % (path, ' '.join(str(error).split()), where)) from None
     except Exception as error:       # (xacro raises what its XML parser and its evaluator raise)
         raise DescriptionError('%s: xacro: %s: %s' % (path, type(error).__name__, ' '.join(str(error).split())))
+    finally:
+        del getattr(xacro, 'all_includes', [])[:]       # (xacro lists every file it read, for --deps, for good)
     return document.toprettyxml(indent='  ')
 
 
