@@ -127,8 +127,8 @@ def _client(scheduler, workers):
     if scheduler:
         return distributed.Client(scheduler, timeout='20s'), None
     # The local workers are forked from one server process that has imported Dask (Dask's "forkserver" method),
-    # not each started afresh ("spawn", Dask's default): measured on 2 cores, a sweep of two short episodes took
-    # 10.2 CPU-s and 6.7 s with spawn, 7.0 CPU-s and 5.0 s with forkserver.
+    # not each started afresh ("spawn", Dask's default): a worker then costs a fork, not Dask's imports again
+    # (docs/benchmarks.md).
     import dask
     dask.config.set({'distributed.worker.multiprocessing-method': 'forkserver',
                      'distributed.worker.preload': ['closed_loop.batch.local_worker']})
