@@ -192,3 +192,20 @@ def test_a_model_that_includes_itself_and_a_world_of_a_hundred_thousand_models_a
     few_thousand = many[:many.index('<model name="m2500">')]
     with pytest.raises(WorldError, match='at most 2000 shapes'):
         load_world(world_file(tmp_path, few_thousand, 'thousands.world'))
+
+
+def test_a_saved_worlds_state_and_an_includes_pose_stand_in_for_the_models_own(tmp_path, model_path):
+    # Gazebo saves where each model stood in <state>, and applies it over the models' poses; an <include>'s
+    # pose stands in for the included model's own (the post's model has one of its own here: left aside).
+    (model_path / 'post' / 'model.sdf').write_text(POST.replace('<static>true</static>',
+                                                                '<static>true</static><pose>5 5 0 0 0 0</pose>'))
+    world = load_world(world_file(tmp_path, UPRIGHT + '''
+    <include><uri>model://post</uri><name>post_b</name></include>
+    <state world_name="test">
+      <model name="wall"><pose>4 1 0.5 0 0 0</pose></model>
+      <model name="post_b"><pose>-3 0 0 0 0 0</pose></model>
+    </state>'''))
+    at = {o.name: o.position for o in world.obstacles}
+    assert at['wall/link/collision'] == (4.0, 1.0, 0.5)                 # the state's, not the model's 3 0 0.5
+    assert at['post_a/link/collision'] == (2.0, -1.5, 0.5)              # the include's pose, not 5 5 0 + it
+    assert at['post_b/link/collision'] == (-3.0, 0.0, 0.5)              # the state's pose of an include

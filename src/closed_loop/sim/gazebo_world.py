@@ -72,17 +72,26 @@ class Reader:
         world = root.find('world') if root.tag == 'sdf' else None
         if world is None:
             self.fail('an SDF world (<sdf><world>...)', '<%s>' % root.tag)
+        # A world Gazebo saved holds where each model stood then in its <state>, which Gazebo applies over the
+        # models' own poses when it loads the world.
+        self.state = {m.get('name'): m for m in world.findall('state/model') if m.find('pose') is not None}
         for element in world:
             if element.tag == 'model':
-                self._model(element, numpy.eye(4), element.get('name', 'model'), os.path.dirname(self.path), 0)
+                self._model(element, numpy.eye(4), element.get('name', 'model'), os.path.dirname(self.path), 0,
+                            top=True)
             elif element.tag == 'include':
-                self._include(element, numpy.eye(4), '', 0)
+                self._include(element, numpy.eye(4), '', 0, top=True)
             elif element.tag in ('plugin', 'actor', 'population'):
                 self.left_out.append('%s %s' % (element.tag, element.get('name') or element.get('filename') or ''))
         return {'name': world.get('name') or os.path.splitext(os.path.basename(self.path))[0],
                 'description': 'Gazebo world %s' % self.path, 'obstacles': self.obstacles}
 
     # -- models --------------------------------------------------------------------------------------
+    def _placed(self, element, name, top):
+        """The pose of a model or include ``element`` called ``name``: the world's <state> of it for one of the
+        world's own (``top``), else its own."""
+        return self._pose(self.state[name] if top and name in self.state else element, name)
+
     def _pose(self, element, name):
         pose = element.find('pose')
         if pose is not None and pose.get('relative_to'):
@@ -92,8 +101,8 @@ class Reader:
         except ValueError:
             self.fail('%s: a pose of six finite numbers (x y z roll pitch yaw)' % name, pose.text)
 
-    def _model(self, model, parent, name, folder, depth):
-        here = parent @ self._pose(model, name)
+    def _model(self, model, parent, name, folder, depth, top=False, placed=None):
+        here = parent @ (placed if placed is not None else self._placed(model, name, top))
         static = (model.findtext('static') or 'false').strip() in ('true', '1')
         if not static and (model.find('link') is not None):
             self.left_out.append('%s: not static (held where it stands)' % name)
@@ -110,7 +119,7 @@ class Reader:
             elif element.tag == 'plugin':
                 self.left_out.append('%s: plugin %s' % (name, element.get('name') or element.get('filename')))
 
-    def _include(self, include, parent, prefix, depth):
+    def _include(self, include, parent, prefix, depth, top=False):
         uri = (include.findtext('uri') or '').strip()
         model_name = uri[len('model://'):] if uri.startswith('model://') else uri
         if model_name in KNOWN_SCENERY:
@@ -130,12 +139,13 @@ class Reader:
         if model is None:
             self.fail('%s: an SDF model (<sdf><model>...)' % sdf, uri)
         name = prefix + (include.findtext('name') or model.get('name') or model_name).strip()
-        pose = include.find('pose')
-        placed = parent @ pose_matrix(pose.text) if pose is not None else parent
         static = include.findtext('static')
         if static is not None and model.find('static') is None:
             ET.SubElement(model, 'static').text = static
-        self._model(model, placed, name, folder, depth + 1)
+        # An include's pose (or the world's state of it) stands in for the model's own, as in Gazebo.
+        given = include.find('pose') is not None or (top and name in self.state)
+        self._model(model, parent, name, folder, depth + 1,
+                    placed=self._placed(include, name, top) if given else self._pose(model, name))
 
     def _model_file(self, uri):
         """(the model's SDF file, its folder) for ``model://NAME`` on the model path, or None."""
