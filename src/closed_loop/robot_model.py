@@ -187,7 +187,7 @@ def _origin_matrix(element):
     return m
 
 
-def _parse_urdf_text(urdf_text, source):
+def parse_urdf(urdf_text, source):
     try:
         return ET.fromstring(urdf_text)
     except ET.ParseError as error:
@@ -196,7 +196,7 @@ def _parse_urdf_text(urdf_text, source):
 
 def link_transforms(urdf_text, root=BASE_FRAME, source='robot_description'):
     """Every link's 4x4 pose in ``root`` with all joints at zero, from the URDF's joint origins."""
-    robot = _parse_urdf_text(urdf_text, source)
+    robot = parse_urdf(urdf_text, source)
     children = {}
     for joint in robot.findall('joint'):
         parent, child = joint.find('parent'), joint.find('child')
@@ -218,7 +218,7 @@ def link_transforms(urdf_text, root=BASE_FRAME, source='robot_description'):
 def fixed_joints(urdf_text, source='robot_description'):
     """[(parent link, child link, (x, y, z) m, quaternion (x, y, z, w))] of every fixed joint, as
     robot_state_publisher sends them on /tf_static."""
-    robot = _parse_urdf_text(urdf_text, source)
+    robot = parse_urdf(urdf_text, source)
     out = []
     for joint in robot.findall('joint'):
         parent, child = joint.find('parent'), joint.find('child')

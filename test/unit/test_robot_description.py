@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from closed_loop import description, robot_model
+from closed_loop import description, robot_model, robot_names
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 from closed_loop.sim import profiles
 from closed_loop.sim.profiles import ProfileError, load_profile
@@ -77,6 +77,28 @@ def test_the_shipped_controllers_drive_it_in_process():
     course = run_episode(EpisodeSpec(world='obstacle_course', goal=(7.0, 0.0), controller='avoid_obstacles',
                                      robot=PROFILE, time_limit_s=40))
     assert course.outcome == 'reached' and course.contacts == 0, course.why
+
+
+def test_what_plays_which_part_is_found_in_the_description():
+    # The profile names none of them: the LIDAR on its mount, the wheels by side, no camera.
+    profile = load_profile(PROFILE)
+    assert profile.found == {'base_frame': 'base_footprint', 'body_link': 'base_link', 'scan_frame': 'laser',
+                             'left_wheel_joints': 'left_wheel_joint', 'right_wheel_joints': 'right_wheel_joint',
+                             'camera_frame': '', 'camera_optical_frame': 'camera_optical_frame'}
+    assert profile.node_params('sim')['scan_frame'] == 'laser' and profile.node_params('avoid_obstacles') == {
+        'max_speed': 0.5, 'scan_frame': 'laser'}
+    # This package's robots without their profiles' names: the same as the profiles name them.
+    for name, named in (('jackal', {'scan_frame': 'front_laser', 'left_wheel_joints': 'front_left_wheel_joint '
+                                    'rear_left_wheel_joint', 'right_wheel_joints': 'front_right_wheel_joint '
+                                    'rear_right_wheel_joint', 'camera_frame': ''}),
+                        ('burger', {'scan_frame': 'base_scan', 'camera_frame': ''}),
+                        ('closed_loop', {'scan_frame': 'base_scan', 'camera_frame': 'camera_link'})):
+        found = robot_names.parts(load_profile(name).urdf)
+        assert {k: found[k] for k in named} == named, (name, found)
+    # What the profile names stays as it is; two candidates for the LIDAR leave the default (the load names it).
+    assert robot_names.parts(profile.urdf, {'scan_frame': 'lidar_mount'})['scan_frame'] == 'lidar_mount'
+    two = profile.urdf.replace('<link name="laser">', '<link name="laser"/><link name="rear_laser">', 1)
+    assert robot_names.parts(two)['scan_frame'] == 'base_scan'
 
 
 def test_the_command_prints_the_urdf_and_one_line_when_it_cannot(capsys):
@@ -161,9 +183,8 @@ def test_a_description_that_cannot_drive_says_so(tmp_path):
     wheel = folder / 'urdf' / 'wheel.xacro'
     wheel.write_text(wheel.read_text().replace('type="continuous"', 'type="fixed"'))
     profile = load_profile(str(folder / 'config' / 'my_robot.yaml'))
-    with pytest.raises(robot_model.RobotModelError, match="joint 'left_wheel_joint' is not a wheel: it is fixed; "
-                                                          "the description has no continuous joints: without "
-                                                          "wheels it cannot drive"):
+    with pytest.raises(robot_model.RobotModelError, match="joint 'wheel_left_joint' is missing; the description has "
+                                                          "no continuous joints: without wheels it cannot drive"):
         run_episode(EpisodeSpec(world='wall', controller='stop_on_obstacle', robot=profile.name, time_limit_s=5))
 
 

@@ -1,4 +1,5 @@
 """Helpers shared by the node classes: start-up, settings from ``~`` parameters, stamps."""
+import dataclasses
 import math
 import os
 import signal
@@ -12,7 +13,7 @@ import rospy
 from dynamic_reconfigure.server import Server as ReconfigureServer
 from geometry_msgs.msg import Twist
 
-from closed_loop import netenv, reconfigure, robot_model
+from closed_loop import netenv, reconfigure, robot_model, robot_names
 from closed_loop.settings import SettingsError, from_params
 
 #: The signal by which :func:`join_launch`'s watcher asks the main thread to shut the node down.
@@ -116,7 +117,9 @@ def load_settings(cls, namespaces=('~',)):
         for namespace in namespaces:
             if rospy.has_param(namespace + name[1:]):
                 return rospy.get_param(namespace + name[1:])
-        return default
+        return found.get(name[1:], default)
+    found = {}
+    found = described_names(cls, get) if tuple(namespaces) == ('~',) else {}
     try:
         settings = from_params(cls, get)
     except SettingsError as error:
@@ -126,6 +129,24 @@ def load_settings(cls, namespaces=('~',)):
     for name, value in vars(settings).items():
         rospy.set_param(namespaces[0] + name, value)
     return settings
+
+
+def described_names(cls, get):
+    """{field: name} for the robot's parts (frames, wheel joints: ``closed_loop.robot_names``) among ``cls``'s
+    fields that no parameter sets, as robot_description has them; {} without one, or where it cannot say."""
+    fields = {f.name for f in dataclasses.fields(cls)} & set(robot_names.DEFAULTS)
+    unset = {f for f in fields if get('~' + f, None) is None}
+    urdf = rospy.get_param('robot_description', None) if unset else None
+    if not isinstance(urdf, str) or not urdf.strip():
+        return {}
+    try:
+        parts = robot_names.parts(urdf, {f: get('~' + f, None) for f in fields - unset})
+    except robot_model.RobotModelError:
+        return {}                               # (the node's own reading of it says what is wrong)
+    found = {f: parts[f] for f in unset if parts[f] != robot_names.DEFAULTS[f]}
+    if found:
+        rospy.loginfo('found in robot_description: %s', ', '.join('%s %r' % item for item in sorted(found.items())))
+    return found
 
 
 def tf_prefix():

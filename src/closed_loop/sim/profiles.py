@@ -17,7 +17,7 @@ import os
 import sys
 from dataclasses import dataclass, field
 
-from closed_loop import cli, description, robot_model
+from closed_loop import cli, description, robot_model, robot_names
 from closed_loop.paths import package_root
 from closed_loop.sim.world_robots import PROFILE_NAME
 from closed_loop.yaml_check import FileError, load_yaml, read_text
@@ -42,14 +42,23 @@ class Profile:
     urdf: str
     params: dict = field(default_factory=dict)
     source: str = ''
+    #: The robot's parts (``closed_loop.robot_names``) as its description has them, where a profile of the
+    #: user's does not name them ({} for this package's: they name theirs, or use the defaults).
+    found: dict = field(default_factory=dict)
 
     @property
     def description_source(self):
         return self.source or 'urdf/%s.urdf' % self.name
 
     def node_params(self, node):
-        """The profile's ``~parameters`` for ``node`` (the simulator is ``sim``), a new dict."""
-        return dict(self.params.get(node) or {})
+        """The profile's ``~parameters`` for ``node`` (the simulator is ``sim``), a new dict: with the parts
+        found in the description that the profile does not name (the simulator's, and a controller's
+        ``scan_frame``)."""
+        params = dict(self.params.get(node) or {})
+        for key, value in self.found.items():
+            if node == 'sim' or key == 'scan_frame':
+                params.setdefault(key, value)
+        return params
 
     @property
     def footprint(self):
@@ -117,7 +126,9 @@ def load_profile_file(reference):
     source = description.resolve(spec['file'], path, base_dir=os.path.dirname(path))
     urdf = description.expand(source, args)
     description.meshes(urdf, source)                 # every mesh there and usable, or nothing runs
-    return Profile(path, urdf, params, source)
+    named = {k: v for k, v in (params.get('sim') or {}).items() if k in robot_names.DEFAULTS}
+    found = {k: v for k, v in robot_names.parts(urdf, named, source).items() if k not in named}
+    return Profile(path, urdf, params, source, found)
 
 
 def main(argv=None):
