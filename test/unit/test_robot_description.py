@@ -194,3 +194,19 @@ def test_the_launch_files_script_is_installed_and_runs(tmp_path):
                           universal_newlines=True, timeout=60, env=dict(os.environ, PYTHONPATH=os.pathsep.join(
                               sys.path)))
     assert done.returncode == 0 and 'fixture_robot_description/meshes/chassis.stl' in done.stdout, done.stderr
+
+
+def test_a_world_of_several_robots_takes_a_profile_file_and_knows_it_however_written():
+    from closed_loop.nodes.sim_node import same_profile
+    from closed_loop.sim.world import WorldError, parse_world
+    robots = [{'name': 'r1', 'profile': 'fixture_robot_description/config/my_robot.yaml'},
+              {'name': 'r2', 'profile': 'closed_loop', 'start': {'x': 4.0, 'y': 0.0, 'yaw': 3.14159}}]
+    world = parse_world({'name': 'two', 'robots': robots})
+    assert [r.profile for r in world.robots] == ['fixture_robot_description/config/my_robot.yaml', 'closed_loop']
+    # The launch gives it as $(find) made it: the same profile; another file, or a name, is not.
+    assert same_profile(PROFILE, 'fixture_robot_description/config/my_robot.yaml')
+    assert same_profile('$(find fixture_robot_description)/config/my_robot.yaml', PROFILE)
+    assert not same_profile(PROFILE, 'fixture_robot_description/config/other.yaml')
+    assert not same_profile('closed_loop', 'burger') and same_profile('burger', 'burger')
+    with pytest.raises(WorldError, match=r"robots\[0\]\.profile: expected a robot profile name"):
+        parse_world({'name': 'two', 'robots': [{'name': 'r1', 'profile': '../robot.urdf'}]})

@@ -106,20 +106,28 @@ def join_launch(name, launch, wait_s):
     return launch.poll() is None
 
 
-def load_settings(cls, namespaces=('~',)):
+def load_settings(cls, namespaces=('~',), description=None):
     """Read ``cls`` from the node's private parameters; on a bad value log it and exit with status 2.
 
     ``namespaces``: where each parameter is looked for, in order (``'~'``, ``'/r1/sim/'``); the first
-    that has it wins, the class default otherwise. The effective values (defaults included, converted)
-    are written back to the first namespace, so ``rosparam get`` shows what the node runs with.
+    that has it wins, the class default otherwise; the robot's parts (frames, wheel joints) no parameter sets,
+    as the robot's description has them (``description``: its parameter; default ``robot_description`` for a
+    node of one robot). The effective values (defaults included, converted) are written back to the first
+    namespace, so ``rosparam get`` shows what the node runs with.
     """
     def get(name, default):
-        for namespace in namespaces:
+        for i, namespace in enumerate(namespaces):
+            if i and name[1:] in found:         # (the robot's description before a shared fallback)
+                return found[name[1:]]
             if rospy.has_param(namespace + name[1:]):
                 return rospy.get_param(namespace + name[1:])
         return found.get(name[1:], default)
     found = {}
-    found = described_names(cls, get) if tuple(namespaces) == ('~',) else {}
+    if description or tuple(namespaces) == ('~',):
+        # A part counts as named where the robot's own namespace names it (a shared fallback's value is the
+        # simulator's default written back, not this robot's).
+        own = (lambda name, default: rospy.get_param(namespaces[0] + name[1:], default))
+        found = described_names(cls, own, description or 'robot_description')
     try:
         settings = from_params(cls, get)
     except SettingsError as error:
@@ -131,12 +139,12 @@ def load_settings(cls, namespaces=('~',)):
     return settings
 
 
-def described_names(cls, get):
+def described_names(cls, get, description='robot_description'):
     """{field: name} for the robot's parts (frames, wheel joints: ``closed_loop.robot_names``) among ``cls``'s
     fields that no parameter sets, as robot_description has them; {} without one, or where it cannot say."""
     fields = {f.name for f in dataclasses.fields(cls)} & set(robot_names.DEFAULTS)
     unset = {f for f in fields if get('~' + f, None) is None}
-    urdf = rospy.get_param('robot_description', None) if unset else None
+    urdf = rospy.get_param(description, None) if unset else None
     if not isinstance(urdf, str) or not urdf.strip():
         return {}
     try:

@@ -16,7 +16,7 @@ from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
 from closed_loop.sim import world as world_mod, world_robots
-from closed_loop import robot_model
+from closed_loop import description, robot_model
 from closed_loop.nodes import sensor_messages as to_msgs
 from closed_loop.nodes import sim_lockstep
 from closed_loop.nodes.common import Publisher, init_node, load_settings
@@ -58,6 +58,18 @@ MAX_LAG_S = 0.25
 SERVICE_WAIT_S = 5.0
 # Idle sleep while paused.
 PAUSED_POLL_S = 0.01
+
+
+def same_profile(a, b):
+    """True if profile references ``a`` and ``b`` name the same profile (a file of the user's by its path, however
+    it is written: ``$(find PKG)/...``, ``PKG/...`` or a path)."""
+    if a == b or not all(isinstance(p, str) and p.endswith(('.yaml', '.yml')) for p in (a, b)):
+        return a == b
+    try:
+        return description.resolve(a, 'robot_profile', package_relative=True) == \
+            description.resolve(b, 'robot_profile', package_relative=True)
+    except description.DescriptionError:
+        return False
 
 
 def package_path():
@@ -167,11 +179,11 @@ class SimNode:
                                'name:=%s robot:=%s)', spec.name, namespace, spec.name, spec.profile)
                 sys.exit(1)
             profile = rospy.get_param(namespace + 'robot_profile', spec.profile)
-            if profile != spec.profile:
+            if not same_profile(profile, spec.profile):
                 rospy.logfatal('sim_node: world robot %r: the world says profile %r, %srobot_profile says %r',
                                spec.name, spec.profile, namespace, profile)
                 sys.exit(1)
-            settings = load_settings(SimSettings, (namespace + 'sim/', '~'))
+            settings = load_settings(SimSettings, (namespace + 'sim/', '~'), namespace + 'robot_description')
             setups.append(RobotSetup(spec.name, settings, urdf, None))
         return setups
 

@@ -55,8 +55,9 @@ def parse_robots(check, value, parse_start, default_start):
             check.fail(field + '.name', 'a name not already used by robots[%d]' % seen[name], name)
         seen[name] = index
         profile = robot.get('profile', DEFAULT_PROFILE)
-        if not isinstance(profile, str) or not PROFILE_NAME.match(profile):
-            check.fail(field + '.profile', 'a robot profile name (letters, digits, _; urdf/NAME.urdf)', profile)
+        if not isinstance(profile, str) or not (PROFILE_NAME.match(profile) or profile.endswith(('.yaml', '.yml'))):
+            check.fail(field + '.profile', 'a robot profile name (letters, digits, _; urdf/NAME.urdf), or a profile '
+                       'file of yours (.yaml: a path or PKG/path)', profile)
         start = parse_start(check, robot['start'], field + '.start') if 'start' in robot else default_start
         robots.append(RobotSpec(name, profile, start))
     return tuple(robots)
