@@ -116,7 +116,8 @@ def test_an_office_map_is_a_world_of_few_boxes_in_which_the_navigator_goes_throu
 
 @pytest.mark.parametrize('start, message', [
     ('-0.5 1.925 0', 'sim.start: expected a pose where the robot'),               # in the wall by the first door
-    ('1 2', "sim: ~start: expected 'x y yaw' (3 finite numbers: m, m, rad) or empty, got '1 2'"),
+    ('1 2', "sim: ~start: expected 'x y yaw' (3 finite numbers: m, m, rad; a launch file's start:= or start_x:= "
+            "and start_y:=) or empty, got '1 2'"),
     ('1 2 nan', "sim: ~start: expected 'x y yaw'"),
 ])
 def test_a_start_in_place_of_the_worlds_is_checked_as_the_worlds_is(tmp_path, start, message):
@@ -159,3 +160,15 @@ def test_a_world_whose_map_is_faulty_names_the_map(tmp_path):
     world.write_text('name: w\nmap: {file: map.yaml}\n')
     with pytest.raises(WorldError, match=r'map\.yaml: free_thresh: expected at most occupied_thresh'):
         load_world(world)
+
+
+def test_a_map_of_more_boxes_than_the_simulator_takes_is_refused_before_any_is_made(tmp_path):
+    """A checkerboard of single occupied cells merges into one box per cell: one row more than
+    ``MAX_BOXES`` allows is refused in one line naming the file and the count."""
+    side = int(math.ceil(math.sqrt(2 * occupancy_map.MAX_BOXES))) + 2
+    board = np.where((np.add.outer(np.arange(side), np.arange(side)) % 2) == 0, OCCUPIED, FREE)
+    path = write_map(tmp_path, board)
+    with pytest.raises(WorldError) as error:
+        load_world(path, check_starts=False)
+    text = str(error.value)
+    assert str(path) in text and 'at most %d boxes' % occupancy_map.MAX_BOXES in text and '\n' not in text, text

@@ -175,13 +175,13 @@ def test_culling_by_angular_window_gives_the_brute_force_distances_to_the_bit(se
     in the sorted bearings or, for a LIDAR's fan, by arithmetic: the same ranges as every ray against every
     obstacle, from origins among the obstacles (inside some boxes' bounding circles), with the scan's bearings
     wrapping past +-pi, partial and full turns, and the scanner pitched and rolled (a fan's bearings then stray
-    from even spacing)."""
+    from even spacing); and each ray walked through a grid of cells (from origins inside it and outside it)."""
     world = clutter(seed, count=300)
-    caster = PlanarRays(world.obstacles)
+    caster, walker = PlanarRays(world.obstacles), PlanarRays(world.obstacles, grid=True)
     centres = numpy.array([o.position for o in world.obstacles])
     rng = numpy.random.default_rng(seed)
     for trial in range(16):
-        origin = (float(rng.uniform(-6, 6)), float(rng.uniform(-6, 6)), 0.2)
+        origin = (float(rng.uniform(-9, 9)), float(rng.uniform(-9, 9)), 0.2)
         yaw = float(rng.uniform(-math.pi, math.pi))
         pitch, roll = (float(rng.choice([0.0, 0.0, 0.02, -0.03])) for _ in range(2))
         count = int(rng.choice([360, 720, 1081]))
@@ -196,5 +196,38 @@ def test_culling_by_angular_window_gives_the_brute_force_distances_to_the_bit(se
         fan = (math.atan2(dirs[0, 1], dirs[0, 0]), angles[1] - angles[0])
         brute = caster.cast(centres, origin, dirs, 30.0, cull=False)
         for culled in (caster.cast(centres, origin, dirs, 30.0), caster.cast(centres, origin, dirs, 30.0, fan=fan),
-                       caster.cast(None, origin, dirs, 30.0, fan=fan)):
+                       caster.cast(None, origin, dirs, 30.0, fan=fan), walker.cast(None, origin, dirs, 30.0)):
             assert numpy.array_equal(culled, brute), (seed, trial, numpy.flatnonzero(culled != brute)[:5])
+        short = float(rng.uniform(0.5, 4.0))
+        assert numpy.array_equal(walker.cast(None, origin, dirs, short),
+                                 caster.cast(centres, origin, dirs, short, cull=False)), (seed, trial, short)
+
+def test_a_map_of_thousands_of_boxes_is_walked_cell_by_cell_to_the_same_distances():
+    """A world of more than ``GRID_MIN_OBSTACLES`` standing boxes and cylinders (walls of rooms as a map gives
+    them, axis-aligned and turned, touching and overlapping) takes the grid by itself; its rays, level and
+    pitched, from inside rooms, on a cell's side and outside the map, are the brute force's to the bit."""
+    from closed_loop.sim import planar_rays
+    from closed_loop.sim.world import Obstacle
+    rng = numpy.random.default_rng(7)
+    obstacles = []
+    for i in range(planar_rays.GRID_MIN_OBSTACLES + 200):
+        x, y = float(rng.uniform(0, 60)), float(rng.uniform(0, 60))
+        if i % 3:
+            size = (float(rng.choice([0.1, 0.6, 4.0])), float(rng.choice([0.1, 0.6, 4.0])), 1.0)
+            obstacles.append(Obstacle('b%d' % i, 'box', (x, y, 0.5), float(rng.choice([0.0, 0.0, 0.4])), size, 0.0,
+                                      (1.0, 1.0, 1.0, 1.0), None))
+        else:
+            obstacles.append(Obstacle('c%d' % i, 'cylinder', (x, y, 0.5), 0.0, (0.3, 0.3, 1.0), 0.15,
+                                      (1.0, 1.0, 1.0, 1.0), None))
+    walker = PlanarRays(obstacles)
+    assert walker._grid is not None
+    centres = numpy.array([o.position for o in obstacles])
+    angles = numpy.arange(720) * 2 * math.pi / 720 - math.pi
+    for origin in ((30.0, 30.0, 0.3), (walker._grid[0] + 5 * walker._grid[2], 12.3, 0.3), (-5.0, 70.0, 0.3),
+                   (80.0, -3.0, 0.3)):
+        for pitch in (0.0, 0.01):
+            dirs = numpy.column_stack((numpy.cos(angles) * math.cos(pitch), numpy.sin(angles) * math.cos(pitch),
+                                       numpy.full(720, -math.sin(pitch))))
+            brute = walker.cast(centres, origin, dirs, 30.0, cull=False)
+            assert numpy.isfinite(brute).sum() > 50
+            assert numpy.array_equal(walker.cast(None, origin, dirs, 30.0), brute), origin

@@ -29,7 +29,7 @@ MAX_MAP_FILE_BYTES = 64 * 1024
 #: The largest image (cells) and the most boxes a map may make (a map past them is refused, not loaded for
 #: minutes).
 MAX_CELLS = 20000 * 20000
-MAX_BOXES = 20000
+MAX_BOXES = 100000
 MAP_COLOR = (0.45, 0.45, 0.5, 1.0)
 
 

@@ -95,8 +95,8 @@ class SimSettings:
         if not self.start.strip():
             return None
         if len(values) != 3 or not all(math.isfinite(v) for v in values):
-            raise SettingsError("~start: expected 'x y yaw' (3 finite numbers: m, m, rad) or empty, got %r"
-                                % self.start)
+            raise SettingsError("~start: expected 'x y yaw' (3 finite numbers: m, m, rad; a launch file's start:= "
+                                "or start_x:= and start_y:=) or empty, got %r" % self.start)
         return values
 
     def check_together(self):
