@@ -134,6 +134,7 @@ MODULES = {
     'pybullet': ('pip:pybullet', 'python3-pybullet-pip'), 'numba': ('pip:numba', 'python3-numba'),
     'matplotlib': ('pip:matplotlib', 'python3-matplotlib'), 'xacro': ('pip:xacro', 'xacro'),
     'dask': ('pip:dask', None), 'distributed': ('pip:distributed', None),
+    'trimesh': ('pip:trimesh', 'python3-trimesh-pip'), 'collada': ('pip:pycollada', 'python3-collada'),
 }
 
 

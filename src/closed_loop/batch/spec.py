@@ -101,12 +101,14 @@ class EpisodeResult(Verdict):
     logs: Optional[str] = None
 
 
-def load_episode_world(spec_world, profile):
-    """The :class:`closed_loop.sim.world.World` a spec's ``world`` names."""
+def load_episode_world(spec_world, profile, check_starts=True):
+    """The :class:`closed_loop.sim.world.World` a spec's ``world`` names (its starts checked free for the
+    profile's footprint unless not ``check_starts``)."""
     if isinstance(spec_world, dict):
         raw = generated_world(spec_world, profile)
-        return parse_world(raw, raw['name'], footprint=profile.footprint)
-    return load_world(resolve_world(spec_world, '%s/worlds' % PACKAGE_ROOT), footprint=profile.footprint)
+        return parse_world(raw, raw['name'], footprint=profile.footprint, check_starts=check_starts)
+    return load_world(resolve_world(spec_world, '%s/worlds' % PACKAGE_ROOT), footprint=profile.footprint,
+                      check_starts=check_starts)
 
 
 def generated_world(spec_world, profile):
@@ -182,15 +184,6 @@ def prepare(spec, cache=None):
         cls = controller_class(name) if name is not None else None
     except ControllerError as error:
         raise EpisodeError(str(error))
-    key = ('world', repr(spec.world), spec.robot)
-    try:
-        if key not in cache:
-            cache[key] = load_episode_world(spec.world, profile)
-    except EpisodeError:
-        raise
-    except (TypeError, ValueError) as error:
-        raise EpisodeError('world: %s' % error)
-    world = cache[key]
     if not isinstance(spec.settings, dict) or not isinstance(spec.sim, dict):
         raise EpisodeError('settings, sim: expected mappings of ~parameters')
     if cls is not None:
@@ -206,6 +199,17 @@ def prepare(spec, cache=None):
         start = Rig.check_params(sim_params)[0].start_pose
     except SettingsError as error:
         raise EpisodeError('sim: %s' % error)
+    # A start of the episode's own stands in for the world's, which is then not checked (a Gazebo world or a
+    # map has none: its origin, which may be in a wall).
+    key = ('world', repr(spec.world), spec.robot, start is None)
+    try:
+        if key not in cache:
+            cache[key] = load_episode_world(spec.world, profile, check_starts=start is None)
+    except EpisodeError:
+        raise
+    except (TypeError, ValueError) as error:
+        raise EpisodeError('world: %s' % error)
+    world = cache[key]
     if start is not None:               # sim: {start: 'x y yaw'}: where the robot starts, in place of the world's
         try:
             world = with_start(world, start, profile.footprint, WorldError, 'sim.start')

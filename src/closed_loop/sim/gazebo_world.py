@@ -4,20 +4,24 @@ Read: every ``<model>`` of the world, nested models, and ``<include>``d models (
 ``GAZEBO_MODEL_PATH``, as Gazebo finds it: ``NAME/model.config`` names the SDF file), their ``<link>``s and the
 ``<collision>`` geometry of each: ``box``, ``cylinder``, ``sphere`` and ``mesh`` (``model://``, ``file://`` or
 a path beside the model, with its ``scale``). Poses (``<pose>x y z roll pitch yaw</pose>``) are composed from
-the world down to each collision. A shape standing upright becomes a box or cylinder of the same size at the
-same place; what cannot be one exactly becomes the upright box around it, and is named in the world's
-``left_out`` list: a sphere (the cylinder round it), a mesh (the box round its vertices as pybullet reads
-them), a tilted shape. Left out, and named there too: plugins, actors, models not found, geometry of another
-kind (a heightmap, a plane other than the ground), and poses ``relative_to`` another frame. The ground plane
-and the sun (Gazebo's usual includes) are the ground and the light this package has already.
+the world down to each collision. A box or cylinder standing upright is a box or cylinder of the same size at
+the same place, a sphere the upright cylinder round it; a mesh, and a box or cylinder tilted off the upright,
+stand as the boxes of their footprint (``closed_loop.sim.mesh_footprint``: seen from above between the floor
+and the overhead, in 5 cm cells). Both approximations are named in the world's ``left_out`` list. Left out,
+and named there too: plugins, actors, models not found, geometry of another kind (a heightmap, a plane other
+than the ground), and poses ``relative_to`` another frame. The ground plane and the sun (Gazebo's usual
+includes) are the ground and the light this package has already.
 
-Free of ROS. Returns the data of a world file (``closed_loop.sim.world`` checks it as it checks one).
+Free of ROS. Returns the data of a world file (``closed_loop.sim.world`` checks it as it checks one) and the
+footprints' boxes beside it.
 """
 import math
 import os
 import xml.etree.ElementTree as ET
 
 import numpy
+
+from closed_loop.sim import mesh_footprint, occupancy_map
 
 SUFFIXES = ('.world', '.sdf')
 #: Includes that are not obstacles: Gazebo's own ground and light.
@@ -62,7 +66,7 @@ class Reader:
         self.fail = fail
         self.model_path = [p for p in (model_path if model_path is not None else
                                        os.environ.get('GAZEBO_MODEL_PATH', '')).split(os.pathsep) if p]
-        self.obstacles, self.left_out, self.names = [], [], {}
+        self.obstacles, self.left_out, self.names, self.footprints = [], [], {}, []
 
     def world_data(self, text):
         try:
@@ -175,8 +179,7 @@ class Reader:
         upright = abs(m[2, 0]) < UPRIGHT_RAD and abs(m[2, 1]) < UPRIGHT_RAD
         yaw = math.atan2(m[1, 0], m[0, 0])
         if kind == 'mesh':
-            self.left_out.append('%s: a mesh (the upright box round it)' % name)
-            return self._bounding_box(name, m, self._mesh_points(shape, name, folder), yaw if upright else 0.0)
+            return self._footprint(name, m, self._mesh_triangles(shape, name, folder), 'a mesh')
         if kind not in SIZES:
             self.left_out.append('%s: %s geometry' % (name, kind or 'no'))
             return None
@@ -195,18 +198,30 @@ class Reader:
             self.left_out.append('%s: a sphere (the cylinder round it)' % name)
             return self._add(name, 'cylinder', m[:3, 3], 0.0, (radius, 2 * radius))
         if kind == 'box':
-            size = sizes['size']
             if upright:
-                return self._add(name, 'box', m[:3, 3], yaw, size)
-        else:
-            radius, length = sizes['radius'][0], sizes['length'][0]
-            if upright:
-                return self._add(name, 'cylinder', m[:3, 3], 0.0, (radius, length))
-            size = (2 * radius, 2 * radius, length)
-        self.left_out.append('%s: a tilted %s (the upright box round it)' % (name, kind))
-        return self._bounding_box(name, m, _box_corners(size), 0.0)
+                return self._add(name, 'box', m[:3, 3], yaw, sizes['size'])
+            return self._footprint(name, m, mesh_footprint.box_triangles(sizes['size']), 'a tilted box')
+        radius, length = sizes['radius'][0], sizes['length'][0]
+        if upright:
+            return self._add(name, 'cylinder', m[:3, 3], 0.0, (radius, length))
+        return self._footprint(name, m, mesh_footprint.cylinder_triangles(radius, length), 'a tilted cylinder')
 
-    def _mesh_points(self, mesh, name, folder):
+    def _footprint(self, name, m, triangles, what):
+        """The boxes of the footprint of ``triangles`` placed by ``m`` (``what`` they are, for left_out)."""
+        boxes = mesh_footprint.footprint_boxes(triangles, m, name, self.fail)
+        if not boxes:
+            self.left_out.append('%s: %s, all of it below %g m or above %g m (no obstacle)' % (
+                name, what, mesh_footprint.FLOOR_M, mesh_footprint.OVERHEAD_M))
+            return
+        self.left_out.append('%s: %s (its footprint, %d box%s of %g m cells)' % (
+            name, what, len(boxes), '' if len(boxes) == 1 else 'es', mesh_footprint.CELL_M))
+        for box in boxes:
+            box.update(type='box', color=tuple(DEFAULT_COLOR))
+        self.footprints += boxes
+        if len(self.footprints) > occupancy_map.MAX_BOXES:
+            self.fail('footprints of at most %d boxes in all' % occupancy_map.MAX_BOXES, '%d' % len(self.footprints))
+
+    def _mesh_triangles(self, mesh, name, folder):
         from closed_loop import description
         uri = (mesh.findtext('uri') or '').strip()
         if uri.startswith('model://'):
@@ -224,19 +239,12 @@ class Reader:
         scale = tuple(_numbers(mesh.findtext('scale') or '1 1 1', 3))
         try:
             description.check_mesh(path, uri, self.path)
-            return description.mesh_points(path, scale)
         except description.DescriptionError as error:
-            self.fail('%s: a mesh pybullet reads' % name, str(error))
-
-    def _bounding_box(self, name, m, corners, yaw):
-        """The upright box, turned by ``yaw``, round ``corners`` (the shape's, in its own frame) placed by ``m``."""
-        world = corners @ m[:3, :3].T + m[:3, 3]
-        c, s = math.cos(yaw), math.sin(yaw)
-        local = numpy.column_stack((c * world[:, 0] + s * world[:, 1], -s * world[:, 0] + c * world[:, 1], world[:, 2]))
-        low, high = local.min(axis=0), local.max(axis=0)
-        mid = (low + high) / 2.0
-        centre = (c * mid[0] - s * mid[1], s * mid[0] + c * mid[1], mid[2])
-        return self._add(name, 'box', centre, yaw, tuple(numpy.maximum(high - low, 1e-6)))
+            self.fail('%s: a mesh' % name, str(error))
+        try:
+            return mesh_footprint.read_triangles(path, scale)
+        except ValueError as error:
+            self.fail('%s: %s' % (name, error), path)
 
     def _add(self, name, kind, position, yaw, size):
         if len(self.obstacles) >= MAX_OBSTACLES:
@@ -263,16 +271,12 @@ def _numbers(text, count, positive=True):
     return values
 
 
-def _box_corners(size):
-    hx, hy, hz = (0.5 * v for v in size)
-    return numpy.array([[sx * hx, sy * hy, sz * hz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-
-
 def world_data(path, text, error_class, model_path=None):
-    """(the data of a world file, for ``closed_loop.sim.world.parse_world``; what was left out or approximated)
-    from the Gazebo world ``text`` read from ``path``; what is wrong raises ``error_class(path, field, expected,
-    got)`` (a :class:`closed_loop.yaml_check.FileError`)."""
+    """(the data of a world file, for ``closed_loop.sim.world.parse_world``; what was left out or approximated;
+    the boxes of the meshes' and tilted shapes' footprints, as obstacles' fields) from the Gazebo world ``text``
+    read from ``path``; what is wrong raises ``error_class(path, field, expected, got)`` (a
+    :class:`closed_loop.yaml_check.FileError`)."""
     def fail(what, got):
         raise error_class(path, '(Gazebo world)', what, got)
     reader = Reader(path, fail, model_path)
-    return reader.world_data(text), tuple(reader.left_out)
+    return reader.world_data(text), tuple(reader.left_out), reader.footprints

@@ -154,7 +154,7 @@ class _WorldChecker(Checker):
         return rgba
 
 
-def parse_world(data, source='<string>', footprint=None, check_starts=True):
+def parse_world(data, source='<string>', footprint=None, check_starts=True, derived=()):
     """Validate an already-loaded YAML object and return a :class:`World`.
 
     ``source`` names the file in error messages. Raises :class:`WorldError` on the first problem:
@@ -166,7 +166,8 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
     or, without one, a disk of ``ROBOT_CLEARANCE_RADIUS_M`` (both in ``closed_loop.sim.world_robots``). For a world with ``robots:``, ``footprint``
     is {robot name: footprint} (a robot missing from it is a disk), and no two robots may start
     overlapping. ``check_starts`` False skips the start checks (to read which robots a world has before
-    their footprints are known).
+    their footprints are known). ``derived``: boxes (obstacles' fields) made from the file beside its own (the
+    footprints of a Gazebo world's meshes), after them.
     """
     check = _WorldChecker(source)
     top = check.mapping(data, '(top level)', _TOP_KEYS)
@@ -214,6 +215,7 @@ def parse_world(data, source='<string>', footprint=None, check_starts=True):
         obstacles.append(obstacle)
     if 'map' in top:
         obstacles += _map_obstacles(check, top['map'], source)
+    obstacles += [Obstacle(shape=box.pop('type'), radius=0.0, motion=None, **box) for box in map(dict, derived)]
 
     goal = None
     if 'goal' in top:
@@ -357,8 +359,8 @@ def load_world(path, footprint=None, check_starts=True):
     path = os.fspath(path)
     text = read_text(path, MAX_WORLD_FILE_BYTES, WorldError, 'world file')
     if gazebo_world.is_gazebo_world(path):      # its static shapes, the robot at its origin
-        data, left_out = gazebo_world.world_data(path, text, WorldError)
-        return dataclasses.replace(parse_world(data, path, footprint, check_starts), left_out=left_out)
+        data, left_out, derived = gazebo_world.world_data(path, text, WorldError)
+        return dataclasses.replace(parse_world(data, path, footprint, check_starts, derived), left_out=left_out)
     data = load_yaml(text, path, WorldError)
     if occupancy_map.is_map(data):          # a map_server map as it is: its cells, the robot at its origin
         data = {'name': os.path.splitext(os.path.basename(path))[0], 'map': {'file': os.path.abspath(path)},
