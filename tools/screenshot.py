@@ -17,7 +17,7 @@ ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop import launcher, netenv  # noqa: E402
-from closed_loop.screen import VirtualScreen  # noqa: E402
+from closed_loop.nodes.screen import VirtualScreen  # noqa: E402
 
 MASTER_PORT = 11397
 MOVED_M = 1.6          # far enough for the slow zone and the camera to show the box large

@@ -22,7 +22,7 @@ import rostest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
-from closed_loop.screen import ScreenError, VirtualScreen  # noqa: E402
+from closed_loop.nodes.screen import ScreenError, VirtualScreen  # noqa: E402
 
 MOVED_M = 0.5
 DRAW_WAIT_S = 45.0          # wall seconds rviz has to draw everything once the robot has moved (a loaded

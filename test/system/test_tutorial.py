@@ -14,7 +14,7 @@ import yaml
 from conftest import ROOT, doc_code, wait_for
 from learner import Learner, page_commands
 
-from closed_loop.screen import VirtualScreen
+from closed_loop.nodes.screen import VirtualScreen
 
 PAGE = 'tutorial.md'
 #: Bounds that only catch hangs (a part runs in real time, under a full test run's load).

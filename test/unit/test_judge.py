@@ -35,6 +35,27 @@ def test_a_robot_at_rest_for_the_hold_is_stopped_from_when_it_came_to_rest():
     assert verdict.path_m == pytest.approx(1.0) and verdict.commands == 21
 
 
+def test_an_episode_ended_at_rest_is_what_it_was_when_it_came_to_rest():
+    """The track, the path and the least clearance stop where the robot came to rest: its creep while it is held
+    there (closer to an obstacle, here) is not the episode's, so a picture's times are within its time."""
+    judge = Judge(JudgeSettings(rest_hold=1.0), keep_track=True)
+    t = 0.0
+    for i in range(30):
+        moving = i < 10
+        x = 0.1 * i if moving else 1.0 + 0.0004 * (i - 9)         # 0.4 mm a period while held at rest
+        judge.on_clearance(1.5 - x)
+        command = (0.5, 0.0) if moving else (0.0, 0.0)
+        judge.on_command(command)
+        if judge.due(t) and judge.observe(t, x, 0.0, 0.0, 0.5 if moving else 0.004, 0.0, command, None):
+            break
+        t += 0.1
+    verdict = judge.verdict(t)
+    assert verdict.outcome == 'stopped' and verdict.time_s == pytest.approx(1.0)
+    assert judge.track[-1][0] == pytest.approx(1.0) and max(row[0] for row in judge.track) <= verdict.time_s
+    assert verdict.min_clearance_m == pytest.approx(1.5 - 1.0004) and verdict.path_m == pytest.approx(1.0004)
+    assert min(row[8] for row in judge.track) == verdict.min_clearance_m
+
+
 def test_a_robot_rocking_where_it_came_to_rest_is_at_rest_and_one_that_moves_off_is_not():
     # Under a zero command, after coming to rest at x = 1: rocking on its wheels (speed and yaw rate swinging
     # past rest_speed and rest_yaw_rate, 1 mm back and forth) is at rest, and the scenario ends as stopped from

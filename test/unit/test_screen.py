@@ -7,7 +7,7 @@ import struct
 
 import pytest
 
-from closed_loop.screen import XWD_ATTEMPTS, ScreenError, VirtualScreen, xwd_to_rgb
+from closed_loop.nodes.screen import XWD_ATTEMPTS, ScreenError, VirtualScreen, xwd_to_rgb
 
 PIXELS = [0x112233, 0x445566, 0x778899, 0xaabbcc]   # 0xRRGGBB, 2 x 2, row by row
 

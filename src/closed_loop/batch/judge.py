@@ -157,6 +157,7 @@ class Judge:
         self._rest_since = None
         self._rest_pose = None       # (x, y) where it came to rest, while it is at rest
         self._rest_end = False       # ended by resting (not by time or contact)
+        self._at_rest = None         # (clearance, path, track length) when it came to rest
 
     def due_from(self):
         """The simulated time (s) from which :meth:`due` is true (inf once the scenario is over)."""
@@ -210,6 +211,10 @@ class Judge:
         at_rest = zero and (abs(speed) < s.rest_speed and abs(yaw_rate) < s.rest_yaw_rate
                             or self._held(x, y, yaw_rate))
         self._rest_pose = (self._rest_pose or (x, y)) if at_rest else None
+        if at_rest and self._rest_since is None:
+            # What the episode was when it came to rest: if it ends so, it ended then, and what the robot
+            # did while it was held at rest (a creep of millimetres) is not part of it.
+            self._at_rest = (self.clearance, self.path_m, len(self.track) if self.track is not None else 0)
         self._rest_since = (self._rest_since if self._rest_since is not None else t_s) if at_rest else None
         error = self.goal_error(x, y)
         near_goal = error is not None and error <= s.success_radius
@@ -220,6 +225,9 @@ class Judge:
         elif self._rest_since is not None and t_s - self._rest_since >= s.rest_hold - 1e-9 \
                 and (near_goal or s.end_at_rest) and (self.moves or t_s >= s.first_command_wait - 1e-9):
             self._rest_end = True
+            self.clearance, self.path_m, kept = self._at_rest
+            if self.track is not None:
+                del self.track[kept:]
             self._end(self._rest_since)
         elif t_s >= s.time_limit - 1e-9:
             self._end(t_s)

@@ -29,9 +29,8 @@ from closed_loop import recording
 from closed_loop.nodes.common import Publisher, init_node, load_settings
 
 #: How often the graph is looked at for new topics (s, wall clock): until every topic is recorded, then once it is
-#: (in lockstep a look, a request to the master, is work the simulator waits for: on a loaded 2-core machine a look
-#: every 50 ms left it so few quiet moments that a recorded episode ran 12 times slower than real time); and how
-#: often the free space is checked.
+#: (in lockstep a look, a request to the master, is work the simulator waits for, so looks stay rare once
+#: there is nothing new to find); and how often the free space is checked.
 POLL_S, RECORDING_POLL_S, ROOM_CHECK_PERIOD_S = 0.05, 1.0, 2.0
 LEFT_OUT = ('/rosout', '/rosout_agg')
 #: Time 0 is not a valid time to rosbag play; what is received then is written 1 ns later.

@@ -30,7 +30,7 @@ ROOT_LINK_INERTIA_KGM2 = 1e-7
 ALL_GROUPS = -1
 OWN_SENSOR_GROUP_BIT = 8
 #: A contact point this near (m; negative: inside) is a touch. Bullet reports points up to its breaking
-#: threshold apart: a Jackal 7 mm from a post was counted as in contact.
+#: threshold apart (millimetres, not a touch).
 CONTACT_TOUCH_M = 0.001
 
 
