@@ -4,7 +4,7 @@ import numpy
 
 from closed_loop.control.clearance_field import (CHAMFER_ERROR, FIELD_ERROR_M, GRID_CELL_M, DistanceField,
                                                  clearances, outline32)
-from closed_loop.control.guard import footprint_clearances
+from closed_loop.control.safety import footprint_clearances
 from closed_loop.robot_model import Footprint
 
 JACKAL = Footprint(-0.254, 0.254, -0.2155, 0.2155)

@@ -6,7 +6,7 @@ import numpy
 import pytest
 
 from closed_loop.control import escape, hybrid_kernel
-from closed_loop.control.guard import footprint_clearance
+from closed_loop.control.safety import footprint_clearance
 from closed_loop.control.local_planner import plan
 from closed_loop.control.navigator import NavigatorSettings
 from closed_loop.geometry import Pose2D

@@ -4,9 +4,9 @@ import math
 import numpy
 import pytest
 
-from closed_loop.control import guard
+from closed_loop.control import guard, safety
 from closed_loop import robot_model
-from closed_loop.control.scan import Scan
+from closed_loop.control.scan import Scan, scan_points
 from closed_loop.settings import SettingsError, check
 
 URDF = open(robot_model.default_urdf_path()).read()
@@ -33,7 +33,7 @@ def wall_ahead(distance_m, half_width_m=1.5):
 
 
 def run(points, v0, w0, v, w, settings=SETTINGS):
-    return guard.filter_command(guard.scan_points(scan_of(points), LASER), FOOTPRINT, v0, w0, v, w, settings)
+    return guard.filter_command(scan_points(scan_of(points), LASER), FOOTPRINT, v0, w0, v, w, settings)
 
 
 def test_footprint_and_laser_come_from_the_urdf():
@@ -48,7 +48,7 @@ def test_scan_points_follow_rep_117():
     ranges = scan.ranges.copy()
     ranges[0], ranges[1], ranges[2] = -numpy.inf, numpy.nan, 99.0
     scan = Scan(**dict(scan.__dict__, ranges=ranges))
-    points = guard.scan_points(scan, LASER)
+    points = scan_points(scan, LASER)
     # +inf, NaN and out-of-limits give nothing; -inf is an object at range_min (behind: angle -pi).
     assert len(points) == 2
     assert points[0] == pytest.approx([-0.12, 0.0], abs=1e-9)
@@ -64,11 +64,11 @@ def test_braking_path_is_v_squared_over_2a():
 
 def test_clearance_of_the_rectangle():
     points = numpy.array([[0.25, 0.0], [0.0, 0.5], [0.16, 0.165]])
-    assert guard.footprint_clearance(points, FOOTPRINT, 0, 0, 0) == pytest.approx(math.hypot(0.01, 0.01))
-    assert guard.footprint_clearance(numpy.array([[0.0, 0.0]]), FOOTPRINT, 0, 0, 0) == 0.0
-    assert guard.footprint_clearance(numpy.zeros((0, 2)), FOOTPRINT, 0, 0, 0) == math.inf
+    assert safety.footprint_clearance(points, FOOTPRINT, 0, 0, 0) == pytest.approx(math.hypot(0.01, 0.01))
+    assert safety.footprint_clearance(numpy.array([[0.0, 0.0]]), FOOTPRINT, 0, 0, 0) == 0.0
+    assert safety.footprint_clearance(numpy.zeros((0, 2)), FOOTPRINT, 0, 0, 0) == math.inf
     # Turned a quarter, the long side faces +y.
-    assert guard.footprint_clearance(numpy.array([[0.0, 0.25]]), FOOTPRINT, 0, 0, math.pi / 2) == \
+    assert safety.footprint_clearance(numpy.array([[0.0, 0.25]]), FOOTPRINT, 0, 0, math.pi / 2) == \
         pytest.approx(0.10)
 
 
@@ -110,11 +110,11 @@ def test_inside_the_margin_no_point_comes_closer_not_only_the_nearest():
     # Creeping ahead keeps the least clearance (the post's) but brings the wall closer: vetoed.
     post = [(0.0, FOOTPRINT.y_max + 0.04)]
     wall = [(FOOTPRINT.x_max + 0.08, y) for y in numpy.arange(-0.5, 0.5, 0.01)]
-    points = guard.scan_points(scan_of(post + wall), LASER)
-    now = guard.footprint_clearance(points, FOOTPRINT, 0.0, 0.0, 0.0)
+    points = scan_points(scan_of(post + wall), LASER)
+    now = safety.footprint_clearance(points, FOOTPRINT, 0.0, 0.0, 0.0)
     assert now == pytest.approx(0.04, abs=0.005)
     creep = guard.predicted_poses(0.0, 0.0, 0.06 * 0.3, 0.0, SETTINGS)
-    assert guard.path_clearance(points, FOOTPRINT, creep) >= now - guard.CLEARANCE_EPS_M   # the old rule's pass
+    assert safety.path_clearance(points, FOOTPRINT, creep) >= now - safety.CLEARANCE_EPS_M   # the old rule's pass
     assert run(post + wall, 0.0, 0.0, 0.3, 0.0).verdict == guard.GuardVerdict.VETOED
     # Backing away from both passes; so does the same creep with the wall beyond the margin's reach.
     assert run(post + wall, 0.0, 0.0, -0.3, 0.0).verdict == guard.GuardVerdict.PASS
@@ -132,8 +132,8 @@ def test_zero_passes_and_the_margin_is_kept_while_moving_fast():
     assert run(wall_ahead(0.3), 0.0, 0.0, 0.0, 0.0).verdict == guard.GuardVerdict.PASS
     result = run(wall_ahead(1.0), 1.0, 0.0, 1.0, 0.0)
     poses = guard.predicted_poses(1.0, 0.0, result.linear_x, result.angular_z, SETTINGS)
-    points = guard.scan_points(scan_of(wall_ahead(1.0)), LASER)
-    assert guard.path_clearance(points, FOOTPRINT, poses) >= SETTINGS.safety_margin
+    points = scan_points(scan_of(wall_ahead(1.0)), LASER)
+    assert safety.path_clearance(points, FOOTPRINT, poses) >= SETTINGS.safety_margin
 
 
 def test_scan_problems_mean_no_motion():

@@ -57,3 +57,19 @@ def test_already_within_the_margin_and_doubt_a_move_away_is_allowed_and_one_clos
     assert check.safe(0.2, 0.0, 1.0)
     assert not check.safe(-0.15, 0.0, 1.0)
     assert not check.safe(0.0, 0.8, 1.0)
+
+
+def test_within_the_margin_of_one_point_a_creep_toward_another_into_its_margin_is_refused():
+    """The hole of a rule on the least clearance alone: 1 cm from a post beside it (within the margin), the
+    robot creeps toward another ahead, 0.14 m off, which would come to about 0.035 m, inside the margin, while the
+    least clearance (to the one beside) never shrinks. Point by point (``safety.keeps_room``) it is refused; the
+    same creep with the post ahead out of its way passes (the one beside comes no closer)."""
+    beside = numpy.array([[0.0, JACKAL.y_max + 0.01]])
+    post = numpy.array([[JACKAL.x_max + 0.14, 0.0]])
+    none = numpy.zeros((0, 2))
+
+    def check(points):
+        return MoveCheck(SETTINGS, JACKAL, 0.0, 0.0, open_front_scan(), LASER, points, none, numpy.zeros(0), 0.0)
+
+    assert check(numpy.concatenate((beside, post))).safe(0.1, 0.0, 1.0) is False
+    assert check(beside).safe(0.1, 0.0, 1.0) is True

@@ -8,7 +8,7 @@ import pytest
 
 from closed_loop.control import move_check, wavefront
 from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, outline
-from closed_loop.control.guard import scan_points
+from closed_loop.control.scan import scan_points
 from closed_loop.control.local_planner import PREDICTION_STEP_S, NavigatorError, _pursue, plan, predict, required_margin
 from closed_loop.control.navigator import NavigatorSettings
 from closed_loop.geometry import Pose2D
@@ -490,19 +490,27 @@ def test_the_chamfer_transform_never_overstates_by_more_than_its_allowance():
         assert (chamfer * (1.0 - CHAMFER_ERROR) <= exact + 1e-6).all()
 
 
-def test_danger_is_a_path_within_the_margin_of_any_scan_point():
-    # in_danger looks only at points near the swept footprint; it must agree with the whole scan's clearance.
-    from closed_loop.control.guard import path_clearance
+def test_danger_is_the_rule_broken_by_any_scan_point():
+    # in_danger looks only at points near the swept footprint; it must agree with every point of the scan taken
+    # one by one, as safety's rule has it: a path into the margin of one, or closer to one already within it.
     from closed_loop.control.move_check import in_danger
+    from closed_loop.control.safety import CLEARANCE_EPS_M, footprint_clearances, steps_to_rest
     s = NavigatorSettings()
     rng = numpy.random.default_rng(11)
     seen = set()
     for _ in range(300):
         points = rng.uniform(-2.5, 2.5, (int(rng.integers(1, 200)), 2))
+        if rng.uniform() < 0.3:                 # some points within the margin of the footprint now
+            points = numpy.concatenate((points, [[JACKAL.x_max + 0.02, float(rng.uniform(-0.2, 0.2))]]))
         v, w = float(rng.uniform(-0.3, 0.8)), float(rng.uniform(-1.5, 1.5))
-        steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel) / PREDICTION_STEP_S)) + 1
-        poses = predict(v, w, [v], [w], s, s.horizon, steps)[0]
-        expected = path_clearance(points, JACKAL, poses) < required_margin(s, v)
+        poses = predict(v, w, [v], [w], s, s.horizon,
+                        steps_to_rest(v, w, v, w, s.accel, s.yaw_accel, s.horizon, PREDICTION_STEP_S))[0]
+        margin = required_margin(s, v)
+        expected = False
+        for point in points:
+            now = footprint_clearances(point[None, :], JACKAL, [(0.0, 0.0, 0.0)])[0]
+            along = footprint_clearances(point[None, :], JACKAL, poses).min()
+            expected |= bool(along < (now - CLEARANCE_EPS_M if now < margin else margin))
         assert in_danger((v, w), points, s, JACKAL) == expected
         seen.add(expected)
     assert seen == {True, False}
@@ -514,7 +522,7 @@ def test_following_the_way_where_the_window_would_stand_heads_along_it_and_keeps
     # In clutter where the window would stand or turn in place, ``follow`` turns toward the aim (heading first)
     # or drives an arc through it; each such command, followed and braked, keeps its margin; without
     # ``follow`` the window's own command stands.
-    from closed_loop.control.guard import path_clearance
+    from closed_loop.control.safety import path_clearance
     rng = numpy.random.default_rng(3)
     s = NavigatorSettings()
     followed = 0

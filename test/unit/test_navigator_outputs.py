@@ -7,7 +7,7 @@ import pytest
 
 from closed_loop.control import wavefront
 from closed_loop.control.drawing import Drawing, Route
-from closed_loop.control.guard import scan_points
+from closed_loop.control.scan import scan_points
 from closed_loop.control.navigator import NavigatorSettings
 from closed_loop.control.scan import Scan
 from closed_loop.control.scan_memory import CELL_M, ScanMemory

@@ -4,7 +4,7 @@ import math
 
 import numpy
 
-from closed_loop.control.guard import scan_points
+from closed_loop.control.scan import scan_points
 from closed_loop.control.scan import Scan
 from closed_loop.control.scan_memory import CELL_M, ScanMemory
 from closed_loop.geometry import Pose2D

@@ -10,7 +10,7 @@ import math
 import cv2
 import numpy
 
-from closed_loop.control.guard import footprint_clearances
+from closed_loop.control.safety import footprint_clearances
 
 #: Grid cell of the distance transform (m); clearances are read this much on the safe side.
 GRID_CELL_M = 0.04

@@ -3,11 +3,11 @@
 Given the latest scan (as points in base_footprint), the robot's footprint rectangle (from the URDF),
 its current velocity and a commanded velocity, :func:`filter_command` predicts the path the base would
 take if it followed the command for ``reaction_time`` and then braked at ``braking_decel`` (linear)
-and ``angular_decel`` (yaw), and measures the footprint's clearance to every scan point along that path.
-The command passes if the clearance stays at least ``safety_margin``; when the robot is already closer
-than that to some points, if none of those comes closer and none of the others comes within the margin
-(judged point by point: the least clearance alone would let the robot creep toward one obstacle while the
-nearest is another, beside it). Otherwise the command is scaled down, keeping its curvature,
+and ``angular_decel`` (yaw), and measures the footprint's clearance to every scan point along that path:
+the package's one predictor and one rule (``closed_loop.control.safety``), the navigator's too. The command
+passes if the clearance stays at least ``safety_margin``; when the robot is already closer than that to some
+points, if none of those comes closer and none of the others comes within the margin (point by point).
+Otherwise the command is scaled down, keeping its curvature,
 to the largest safe fraction; where none is safe the answer is zero (brake). This is the scheme of the
 ecosystem's safety limiters: predict, then limit; it knows nothing of the controller in front of it.
 
@@ -15,13 +15,13 @@ Free of ROS: scans are :class:`closed_loop.control.scan.Scan`, poses and speeds 
 """
 import dataclasses
 import enum
-import math
 
 import numpy
 
 from closed_loop import robot_model
+from closed_loop.control import safety
 from closed_loop.control.decisions import input_problem
-from closed_loop.control.scan import nearest, sample_angles, usable_ranges
+from closed_loop.control.scan import nearest
 from closed_loop.settings import MIN_RATE_HZ, SettingsError, param
 
 #: Fractions of a command tried, largest first, when the whole command is not safe.
@@ -29,8 +29,6 @@ SCALES = (1.0, 0.8, 0.6, 0.45, 0.3, 0.2, 0.12, 0.06, 0.0)
 #: Prediction time step (s). At 1.5 m/s the robot moves 3 cm per step; the clearance between steps is
 #: covered by ``safety_margin``, which must exceed half of that.
 PREDICTION_STEP_S = 0.02
-#: A clearance change smaller than this (m) counts as "not shrinking" (numerical noise).
-CLEARANCE_EPS_M = 1e-3
 
 
 class GuardVerdict(enum.IntEnum):
@@ -75,110 +73,19 @@ class GuardResult:
     clearance_m: float  # least clearance along the chosen command's predicted path (inf: nothing seen)
 
 
-def scan_points(scan, laser_pose):
-    """The scan's returns as an (N, 2) array of points in base_footprint (m).
-
-    ``laser_pose``: the laser frame's :class:`closed_loop.geometry.Pose2D`. REP 117: ``-inf``
-    (closer than range_min) is a point at range_min; ``+inf`` and invalid rays give no point.
-    """
-    ranges = usable_ranges(scan)
-    angles = sample_angles(scan) + laser_pose.yaw
-    keep = numpy.isfinite(ranges)
-    r, a = ranges[keep], angles[keep]
-    return numpy.column_stack((laser_pose.x + r * numpy.cos(a), laser_pose.y + r * numpy.sin(a)))
-
-
 def scan_problem(scan, age_s, scan_timeout_s):
     """Why the scan cannot be trusted for guarding (missing, stale, or no valid ray), or None."""
     return input_problem(None if scan is None else nearest(scan), age_s, scan_timeout_s)
 
 
-def footprint_clearances(points, footprint, poses):
-    """Least distance (m) from the footprint at each of ``poses`` ((P, 3): x, y, yaw) to ``points`` (N, 2)."""
-    if len(points) == 0:
-        return numpy.full(len(poses), math.inf)
-    return numpy.min(_point_clearances(points, footprint, poses), axis=1)
-
-
-def point_clearances(points, footprint, poses):
-    """(N,): the least distance (m) from the footprint over ``poses`` ((P, 3)) to each of ``points`` (N, 2)."""
-    if len(points) == 0:
-        return numpy.zeros(0)
-    return numpy.min(_point_clearances(points, footprint, poses), axis=0)
-
-
-def _point_clearances(points, footprint, poses):
-    """(P, N): the distance (m) from the footprint at each of ``poses`` to each of ``points`` (N >= 1)."""
-    poses = numpy.asarray(poses, dtype=float).reshape(-1, 3)
-    c, s = numpy.cos(poses[:, 2:3]), numpy.sin(poses[:, 2:3])
-    dx, dy = points[None, :, 0] - poses[:, 0:1], points[None, :, 1] - poses[:, 1:2]
-    px, py = c * dx + s * dy, -s * dx + c * dy
-    ox = numpy.maximum(numpy.maximum(footprint.x_min - px, px - footprint.x_max), 0.0)
-    oy = numpy.maximum(numpy.maximum(footprint.y_min - py, py - footprint.y_max), 0.0)
-    return numpy.hypot(ox, oy)
-
-
-def footprint_clearance(points, footprint, x, y, yaw):
-    """Least distance (m) from the footprint rectangle, placed at pose (x, y, yaw), to ``points``.
-
-    0 for a point inside; ``inf`` when there are no points.
-    """
-    return float(footprint_clearances(points, footprint, [(x, y, yaw)])[0])
-
-
-def _toward(value, target, rate, dt):
-    step = rate * dt
-    return target if abs(target - value) <= step else value + math.copysign(step, target - value)
-
-
 def predicted_poses(v0, w0, v_cmd, w_cmd, settings):
-    """Poses (x, y, yaw) from the origin: follow (v_cmd, w_cmd) for reaction_time, then brake to rest.
-
-    Speeds change at most at the braking rates (the same rates are assumed for speeding up).
-    """
-    dt = PREDICTION_STEP_S
-    x = y = yaw = 0.0
-    v, w = v0, w0
-    poses = [(x, y, yaw)]
-    t = 0.0
-    limit = settings.reaction_time + abs(v0) / settings.braking_decel + abs(w0) / settings.angular_decel \
-        + abs(v_cmd) / settings.braking_decel + abs(w_cmd) / settings.angular_decel + 2 * dt
-    while t < limit:
-        following = t < settings.reaction_time
-        v = _toward(v, v_cmd if following else 0.0, settings.braking_decel, dt)
-        w = _toward(w, w_cmd if following else 0.0, settings.angular_decel, dt)
-        x += v * math.cos(yaw + 0.5 * w * dt) * dt
-        y += v * math.sin(yaw + 0.5 * w * dt) * dt
-        yaw += w * dt
-        t += dt
-        poses.append((x, y, yaw))
-        if not following and v == 0.0 and w == 0.0:
-            break
-    return poses
-
-
-def path_clearance(points, footprint, poses):
-    """Least footprint clearance (m) to ``points`` over ``poses``."""
-    if len(points) == 0:
-        return math.inf
-    # Only points the swept footprint can come near matter.
-    reach = max(math.hypot(px, py) for px, py, _ in poses) + footprint.radius_m
-    near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach + 1.0]
-    return float(numpy.min(footprint_clearances(near, footprint, poses)))
-
-
-def keeps_room(points, footprint, poses, margin):
-    """(safe, least clearance m over ``poses``): safe when no point comes within ``margin`` of the footprint
-    along ``poses``, except one already closer at the origin's pose, which must come no closer."""
-    if len(points) == 0:
-        return True, math.inf
-    reach = max(math.hypot(px, py) for px, py, _ in poses) + footprint.radius_m
-    near = points[numpy.hypot(points[:, 0], points[:, 1]) <= reach + margin]
-    if len(near) == 0:
-        return True, math.inf
-    now = _point_clearances(near, footprint, [(0.0, 0.0, 0.0)])[0]
-    along = _point_clearances(near, footprint, poses).min(axis=0)
-    return bool(numpy.all(along >= numpy.minimum(now, margin) - CLEARANCE_EPS_M)), float(along.min())
+    """Poses (x, y, yaw) from the origin, the origin first: follow (v_cmd, w_cmd) for reaction_time, then brake
+    to rest (``safety.predict``, at the braking rates; the same rates are assumed for speeding up)."""
+    steps = safety.steps_to_rest(v0, w0, v_cmd, w_cmd, settings.braking_decel, settings.angular_decel,
+                                 settings.reaction_time, PREDICTION_STEP_S)
+    poses = safety.predict(v0, w0, [v_cmd], [w_cmd], settings.braking_decel, settings.angular_decel,
+                           settings.reaction_time, steps, PREDICTION_STEP_S)[0]
+    return numpy.concatenate((numpy.zeros((1, 3)), poses))
 
 
 def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
@@ -187,14 +94,14 @@ def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
     ``points``: scan points in base_footprint (:func:`scan_points`); ``v0``, ``w0``: the robot's current
     speeds (m/s, rad/s); ``v_cmd``, ``w_cmd``: the command.
     """
-    now = footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
+    now = safety.footprint_clearance(points, footprint, 0.0, 0.0, 0.0)
     if v_cmd == 0.0 and w_cmd == 0.0:
         return GuardResult(0.0, 0.0, GuardVerdict.PASS, 'zero command', now)
     full = None
     for scale in SCALES[:-1]:
         v, w = scale * v_cmd, scale * w_cmd
-        safe, clearance = keeps_room(points, footprint, predicted_poses(v0, w0, v, w, settings),
-                                     settings.safety_margin)
+        safe, clearance = safety.keeps_room(points, footprint, predicted_poses(v0, w0, v, w, settings),
+                                            settings.safety_margin)
         full = clearance if full is None else full
         if safe:
             if scale == 1.0:
@@ -203,7 +110,7 @@ def filter_command(points, footprint, v0, w0, v_cmd, w_cmd, settings):
             return GuardResult(v, w, GuardVerdict.SLOWED, 'slowed to %d%%: the full command (%.2f m/s, %.2f rad/s) '
                                'would come within %.2f m of an obstacle (safety_margin %.2f m)'
                                % (round(100 * scale), v_cmd, w_cmd, full, settings.safety_margin), clearance)
-    braking = path_clearance(points, footprint, predicted_poses(v0, w0, 0.0, 0.0, settings))
+    braking = safety.path_clearance(points, footprint, predicted_poses(v0, w0, 0.0, 0.0, settings))
     return GuardResult(0.0, 0.0, GuardVerdict.VETOED, 'vetoed (%.2f m/s, %.2f rad/s): even %d%% of it would come '
                        'within %.2f m of an obstacle (safety_margin %.2f m)'
                        % (v_cmd, w_cmd, round(100 * SCALES[-2]), full, settings.safety_margin), braking)

@@ -35,7 +35,9 @@ import numpy
 from closed_loop.control import wavefront
 from closed_loop.control.clearance_field import (FIELD_ERROR_M, OUTLINE_STEP_M, DistanceField, clearances, edge_clearance,
                                          keeps_margin, outline32)
-from closed_loop.control.guard import footprint_clearance, path_clearance, point_clearances, scan_points
+from closed_loop.control import safety
+from closed_loop.control.scan import scan_points
+from closed_loop.control.safety import footprint_clearance, keeps_room, point_clearances
 from closed_loop.control.scan_memory import BLIND_EXTRA_M, blind_points
 
 #: Step between predicted poses (s): between two poses an obstacle point cannot slip through more than the
@@ -100,13 +102,9 @@ class Plan:
 
 
 def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
-    """Poses (C, K, 3) float32 for candidates ``v``, ``w`` (C,) from (v0, w0): speeds move toward the candidate
-    at the accelerations for ``horizon_s``, then to zero at the same rates; K = ``steps`` poses,
-    PREDICTION_STEP_S apart (the speed of each step is the one reached at its end: the pose runs slightly
-    ahead). Compiled: ``arc_kernel``."""
-    return importlib.import_module('closed_loop.control.arc_kernel').predict(
-        float(v0), float(w0), numpy.ascontiguousarray(v, float), numpy.ascontiguousarray(w, float),
-        float(settings.accel), float(settings.yaw_accel), float(horizon_s), int(steps), float(step_s))
+    """Poses (C, K, 3) float32 for candidates ``v``, ``w`` (C,) from (v0, w0): ``safety.predict`` at the
+    settings' accelerations (``accel``, ``yaw_accel``)."""
+    return safety.predict(v0, w0, v, w, settings.accel, settings.yaw_accel, horizon_s, steps, step_s)
 
 
 def prepare():
@@ -137,7 +135,7 @@ def candidate_speeds(max_speed, max_yaw_rate):
 def _pursue(aim_xy, near, footprint, v0, w0, s, steps, turning=0.0):
     """Toward ``aim_xy`` (the robot's frame) along the way, heading first: a turn in place while it lies more
     than PURSUIT_TURN_RAD to a side, else an arc through it at the fastest of PURSUIT_SPEEDS (x
-    ``max_speed``) whose path keeps the margin, judged exactly; (v, w, predicted poses, their clearance, why),
+    ``max_speed``) whose path keeps the margin (``safety.keeps_room``); (v, w, predicted poses, their clearance, why),
     or None when none keeps it. ``turning``: the side (+1 left, -1 right) of a turn in place at the last
     decision, which goes on while the aim lies more than PURSUIT_KEEP_RAD to the other side (an aim that
     swings between ahead and behind from one scan to the next would turn the robot back and forth)."""
@@ -153,8 +151,8 @@ def _pursue(aim_xy, near, footprint, v0, w0, s, steps, turning=0.0):
         why = 'following the way round %.2f m to its aim' % distance
     for v, w in options:
         poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
-        clearance = path_clearance(near, footprint, poses)
-        if clearance >= required_margin(s, max(v, abs(v0))):
+        safe, clearance = keeps_room(near, footprint, poses, required_margin(s, max(v, abs(v0))))
+        if safe:
             return v, w, poses, clearance, why
     return None
 
@@ -260,12 +258,12 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     if now < s.safety_margin:
         now = footprint_clearance(near, footprint, 0.0, 0.0, 0.0)
     if now < s.safety_margin:
-        # Already within the margin: only a turn in place that brings no point closer and opens the clearance
-        # (WITHIN_MARGIN_OPEN_M), judged exactly (the grid is too coarse to see a centimetre), and only while
-        # the robot is nearly at rest.
+        # Already within the margin: only a turn in place that keeps the rule (``safety.keeps_room``: no point
+        # within the margin closer, no other within it) and opens the clearance (WITHIN_MARGIN_OPEN_M), judged
+        # exactly (the grid is too coarse to see a centimetre), and only while the robot is nearly at rest.
         maybe[:] = False
         for i in numpy.nonzero((v == 0.0) & ~safe)[0]:
-            if abs(v0) < 0.05 and path_clearance(near, footprint, safe_poses[i]) >= now and \
+            if abs(v0) < 0.05 and keeps_room(near, footprint, safe_poses[i], s.safety_margin)[0] and \
                     footprint_clearance(near, footprint, *safe_poses[i][-1]) >= now + WITHIN_MARGIN_OPEN_M:
                 safe[i] = True
     # A turn in place keeps BLIND_EXTRA_M more from what it remembers where the scan cannot see (a back corner

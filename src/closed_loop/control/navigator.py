@@ -15,11 +15,10 @@ import math
 import numpy
 
 from closed_loop.control import escape
-from closed_loop.control.guard import footprint_clearances, path_clearance, scan_points
-from closed_loop.control.local_planner import (PREDICTION_STEP_S, check_finite, plan, predict,
-                                               required_margin, step_toward)
+from closed_loop.control.scan import scan_points
+from closed_loop.control.local_planner import check_finite, plan, step_toward
 from closed_loop.control.move_check import MoveCheck
-from closed_loop.control.scan_memory import ScanMemory, blind_points, from_frame, to_frame
+from closed_loop.control.scan_memory import ScanMemory, from_frame, to_frame
 from closed_loop.control.trail import TRAIL_LOOKBACK_M, TRAIL_STEP_M, Trail, back_toward, rear_seen
 from closed_loop.control.loop import LoopSettings, lasted
 from closed_loop.settings import SettingsError, param
@@ -206,7 +205,7 @@ class Navigator:
         return (c * dx + s * dy, -s * dx + c * dy), progress
 
     def scanned(self, scan, laser_pose):
-        """The scan's points in the robot's frame (``guard.scan_points``), worked out once a scan: the node
+        """The scan's points in the robot's frame (``scan.scan_points``), worked out once a scan: the node
         asks on the scan's arrival (is the command being followed still safe?), the decision after it."""
         if self._points_of is None or self._points_of[0] is not scan or self._points_of[1] != laser_pose:
             self._points_of = (scan, laser_pose, scan_points(scan, laser_pose))
@@ -299,24 +298,16 @@ class Navigator:
                                                                                      numpy.sin(around)))))
         return to_frame(numpy.concatenate([disc + xy for xy, _ in self._closed]), pose)
 
-    def _guarded(self, pose, scan, laser_pose):
-        """The points every command's path is checked against (the robot's frame): the scan's, and where the
-        scanner cannot see (behind a LIDAR of less than a full turn), those remembered there."""
-        scanned = self.scanned(scan, laser_pose)
-        blind = blind_points(self._memory.points(pose), scan, laser_pose)
-        return numpy.concatenate((scanned, blind)) if len(blind) else scanned
-
     def _final_approach(self, now_s, pose, goal_local, v0, w0, scan, laser_pose, footprint):
         """The last metre, where the window's coarse speeds would circle the goal: turn toward it, and drive
-        at it slower the closer it is, if that path keeps the margin (judged exactly); else None."""
+        at it slower the closer it is, if that path keeps the margin (``move_check.MoveCheck``); else None."""
         s = self.settings
         distance, bearing = math.hypot(*goal_local), math.atan2(goal_local[1], goal_local[0])
         w = max(-FINAL_TURN_RADPS, min(FINAL_TURN_RADPS, s.max_yaw_rate, FINAL_TURN_GAIN * bearing))
         v = 0.0 if abs(bearing) > FINAL_DRIVE_RAD else min(s.max_speed, FINAL_SPEED_GAIN * distance) * math.cos(bearing)
-        steps = int(math.ceil((s.horizon + abs(v) / s.accel + abs(w) / s.yaw_accel + 1.0) / PREDICTION_STEP_S))
-        poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
-        margin = required_margin(s, max(v, abs(v0)))
-        if path_clearance(self._guarded(pose, scan, laser_pose), footprint, poses) < margin:
+        check = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self.scanned(scan, laser_pose),
+                          self._memory.points(pose), self._memory.t, now_s)
+        if not check.safe(v, w, s.horizon, speed=max(v, abs(v0))):
             return None
         period_s = 1.0 / s.rate_hz
         # One period's step toward (v, w), as the window's (local_planner.step_toward).

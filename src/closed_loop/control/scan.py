@@ -239,3 +239,16 @@ def describe_reading(reading):
         return 'no valid reading (%d of %d rays invalid)' % (reading.total - reading.valid,
                                                             reading.total)
     return '%.2f m' % reading.distance_m
+
+
+def scan_points(scan, laser_pose):
+    """The scan's returns as an (N, 2) array of points in base_footprint (m).
+
+    ``laser_pose``: the laser frame's :class:`closed_loop.geometry.Pose2D`. REP 117: ``-inf``
+    (closer than range_min) is a point at range_min; ``+inf`` and invalid rays give no point.
+    """
+    ranges = usable_ranges(scan)
+    angles = sample_angles(scan) + laser_pose.yaw
+    keep = numpy.isfinite(ranges)
+    r, a = ranges[keep], angles[keep]
+    return numpy.column_stack((laser_pose.x + r * numpy.cos(a), laser_pose.y + r * numpy.sin(a)))

@@ -18,7 +18,7 @@ import time
 import numpy
 
 from closed_loop.control.drawing import Drawing, Goal, Route, Shape
-from closed_loop.control.guard import scan_points
+from closed_loop.control.scan import scan_points
 from closed_loop.control.local_planner import NavigatorError, prepare
 from closed_loop.control.loop import stale_input
 from closed_loop.control.markers import arrow_end

@@ -9,7 +9,8 @@ from sensor_msgs.msg import LaserScan
 from std_msgs.msg import String
 
 from closed_loop.watchdog import SilenceWatchdog
-from closed_loop.control.guard import GuardSettings, GuardVerdict, filter_command, scan_points, scan_problem
+from closed_loop.control.guard import GuardSettings, GuardVerdict, filter_command, scan_problem
+from closed_loop.control.scan import scan_points
 from closed_loop.nodes.common import (LiveSettings, Publisher, StopsOnShutdown, frame_id, init_node,
                                       load_settings, robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
