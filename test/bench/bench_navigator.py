@@ -28,7 +28,7 @@ pockets), seeds from 0 (a seed whose field leaves no way for the robot is passed
 the benchmark scores a run: success x optimal time / its time clipped between 2 and 8 optimal times, the
 optimal time being the world's shortest footprint-feasible way (``barn.way_length``) at the robot's top speed.
 Beside the score, how many of the fill's worlds have a way for the footprint with the room the window's way
-keeps round it (``safety_margin`` + ``local_planner.AIM_ROOM_M`` each side, ``barn.has_way``): how tight the
+keeps round it (``safety_margin`` + ``window.AIM_ROOM_M`` each side, ``barn.has_way``): how tight the
 worlds are for this navigator (a guide, not a bound: the lattice turns by 45 degrees, the robot by any angle).
 
 Targets: success at least 90 %, zero contacts in every run, decision p99 under 5 ms (under 3 ms in the BARN-method
@@ -47,7 +47,7 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop.sim import barn, generators  # noqa: E402
 from closed_loop.sim.clutter import ClutterSettings, generate, narrowest_gap, robot_extent  # noqa: E402
-from closed_loop.control import local_planner, navigator as navigator_module  # noqa: E402
+from closed_loop.control.navigation import navigator as navigator_module, window  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.sim.profiles import load_profile  # noqa: E402
 
@@ -169,7 +169,7 @@ def run_set(method, args):
     seeds = args.seeds or (50 if barn_set else 10)
     # The room the window's way keeps each side of the robot: a world with no way that wide is one the navigator
     # cannot cross (its aim closes every gap narrower).
-    room_m = navigator_module.NavigatorSettings().safety_margin + local_planner.AIM_ROOM_M
+    room_m = navigator_module.NavigatorSettings().safety_margin + window.AIM_ROOM_M
     worlds = barn_worlds(seeds, profile, room_m, args.first_seed) if barn_set else clutter_worlds(seeds, profile)
     rows = collections.defaultdict(list)
     decisions = []

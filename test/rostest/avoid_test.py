@@ -22,7 +22,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 from closed_loop.geometry import quaternion_yaw  # noqa: E402
-from closed_loop.control.navigator import GoalSettings, NavigatorSettings, NavState  # noqa: E402
+from closed_loop.control.navigation.navigator import GoalSettings, NavigatorSettings, NavState  # noqa: E402
 
 HOLD_TOLERANCE_RAD = math.radians(10.0)
 PASSED_BY_M = 3.0

@@ -2,7 +2,7 @@
 exact clearance, and close to it."""
 import numpy
 
-from closed_loop.control.clearance_field import (CHAMFER_ERROR, FIELD_ERROR_M, GRID_CELL_M, DistanceField,
+from closed_loop.control.navigation.clearance_field import (CHAMFER_ERROR, FIELD_ERROR_M, GRID_CELL_M, DistanceField,
                                                  clearances, outline32)
 from closed_loop.control.safety import footprint_clearances
 from closed_loop.robot_model import Footprint

@@ -11,7 +11,7 @@ import machine
 SRC = os.path.abspath(os.path.join(os.path.dirname(__file__), '..', '..', 'src'))
 CHECK = """
 import numpy
-from closed_loop.control import wave_kernel
+from closed_loop.control.navigation import wave_kernel
 from closed_loop.sim.planar_rays import PlanarRays
 from closed_loop.sim.world import parse_world
 world = parse_world({'name': 'one', 'robot': {'start': {'x': 0.0, 'y': 0.0, 'yaw': 0.0}},

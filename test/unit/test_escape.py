@@ -5,10 +5,11 @@ import math
 import numpy
 import pytest
 
-from closed_loop.control import escape, hybrid_kernel
+from closed_loop.control.navigation import escape, hybrid_kernel
 from closed_loop.control.safety import footprint_clearance
-from closed_loop.control.local_planner import plan
-from closed_loop.control.navigator import NavigatorSettings
+from closed_loop.control.navigation.situation import Situation
+from closed_loop.control.navigation.window import plan
+from closed_loop.control.navigation.navigator import NavigatorSettings
 from closed_loop.geometry import Pose2D
 from closed_loop.robot_model import Footprint
 from closed_loop.control.scan import Scan
@@ -134,7 +135,7 @@ def test_a_turn_in_place_within_the_margin_must_open_the_clearance():
     ranges[int(round((math.atan2(post[1], post[0]) + math.pi) / (2 * math.pi / rays))) % rays] = \
         numpy.linalg.norm(post)
     scan = Scan(0.0, 'laser', -math.pi, angles[-1], 2 * math.pi / rays, 0.0, 0.1, 0.05, 8.0, ranges)
-    p = plan(scan, Pose2D(0.0, 0.0, 0.0), JACKAL, 0.0, 0.0, (5.0, 0.0), s)
+    p = plan(Situation(scan, Pose2D(0.0, 0.0, 0.0), JACKAL, 0.0, 0.0, (5.0, 0.0)), s)
     v, w, safe = p.candidates[:, 0], p.candidates[:, 1], p.candidates[:, 3].astype(bool)
     slowest = (v == 0.0) & (numpy.abs(w) > 0) & numpy.isclose(numpy.abs(w), numpy.abs(w[w != 0]).min())
     assert slowest.sum() == 2 and not safe[slowest].any()
@@ -189,7 +190,7 @@ def test_a_move_whose_arc_back_onto_the_plan_is_not_safe_is_sent_with_its_turn_s
     # rad/s), toward a wall ``wall_m`` from its left side. Far enough, that command is sent. Nearer, it keeps the
     # margin at no slower speed with that turn (the arc swings the front corner out), and the escape waited
     # until it dropped the plan; now the turn is slowed too.
-    from closed_loop.control.move_check import MoveCheck
+    from closed_loop.control.navigation.move_check import MoveCheck
     wall = numpy.column_stack((numpy.arange(-1.0, 2.0, 0.01), numpy.full(300, JACKAL.y_max + wall_m)))
     front = Scan(0.0, 'laser', -3 * math.pi / 4, 3 * math.pi / 4, math.pi / 360, 0.0, 0.1, 0.1, 8.0,
                  numpy.full(541, numpy.inf))

@@ -169,7 +169,7 @@ def test_a_circle_is_seen():
 def test_the_layering_is_seen_by_the_checks():
     """The checks above can fail: a control module importing the simulator, and a core importing rospy,
     are caught."""
-    assert layer('closed_loop.control.navigator') == 'control'
+    assert layer('closed_loop.control.navigation.navigator') == 'control'
     assert layer('closed_loop.sim.sensors.lidar') == 'sim'
     assert layer('closed_loop.settings') == 'helpers'
     assert layer('closed_loop.sweep') == 'batch'

@@ -1,4 +1,4 @@
-"""The exact check of a slow move off the dynamic window (``closed_loop.control.move_check``): the margin from
+"""The exact check of a slow move off the dynamic window (``closed_loop.control.navigation.move_check``): the margin from
 what the scan shows, the margin and a doubt from what is remembered where it cannot see, and, where the robot
 already stands closer than that, only moves that bring nothing closer."""
 import math
@@ -6,8 +6,8 @@ import math
 import numpy
 import pytest
 
-from closed_loop.control.move_check import BLIND_DRIFT_MPS, BLIND_EXTRA_M, MoveCheck
-from closed_loop.control.navigator import NavigatorSettings
+from closed_loop.control.navigation.move_check import BLIND_DRIFT_MPS, BLIND_EXTRA_M, MoveCheck
+from closed_loop.control.navigation.navigator import NavigatorSettings
 from closed_loop.control.scan import Scan
 from closed_loop.geometry import Pose2D
 from closed_loop.robot_model import Footprint

@@ -6,11 +6,14 @@ import cv2
 import numpy
 import pytest
 
-from closed_loop.control import move_check, wavefront
-from closed_loop.control.clearance_field import CHAMFER_ERROR, edge_clearance, outline
+from closed_loop.control.navigation import move_check, wavefront
+from closed_loop.control.navigation.clearance_field import CHAMFER_ERROR, edge_clearance, outline
 from closed_loop.control.scan import scan_points
-from closed_loop.control.local_planner import PREDICTION_STEP_S, NavigatorError, _pursue, plan, predict, required_margin
-from closed_loop.control.navigator import NavigatorSettings
+from closed_loop.control.navigation.pursuit import pursue
+from closed_loop.control.navigation.situation import (PREDICTION_STEP_S, NavigatorError, Situation, predict,
+                                                      required_margin)
+from closed_loop.control.navigation.window import plan
+from closed_loop.control.navigation.navigator import NavigatorSettings
 from closed_loop.geometry import Pose2D
 from closed_loop.robot_model import Footprint
 from closed_loop.control.scan import Scan
@@ -46,7 +49,7 @@ def scan_of(circles=(), segments=(), rays=RAYS, range_max=8.0):
 
 
 def run(scan, goal=(10.0, 0.0), v0=0.5, w0=0.0, footprint=FOOTPRINT, **overrides):
-    return plan(scan, LASER, footprint, v0, w0, goal, NavigatorSettings(**overrides))
+    return plan(Situation(scan, LASER, footprint, v0, w0, goal), NavigatorSettings(**overrides))
 
 
 def test_open_floor_heads_straight_for_the_goal_at_full_speed():
@@ -86,11 +89,12 @@ def test_where_what_is_remembered_shuts_the_only_way_the_newest_scan_is_asked():
     # A wall across the way with one gap, 0.8 m wide, to the left; odometry has carried remembered points into it.
     wall = [((1.5, -3.0), (1.5, 0.8)), ((1.5, 1.6), (1.5, 3.0))]
     remembered = numpy.column_stack((numpy.full(17, 1.5), numpy.linspace(0.8, 1.6, 17)))
-    p = plan(scan_of(segments=wall), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), NavigatorSettings(), remembered)
+    p = plan(Situation(scan_of(segments=wall), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), remembered), NavigatorSettings())
     assert p.way is not None and p.aim_xy[1] > 0.3, p.aim_xy
     # The scan shows the gap shut too: no way, and the goal is the aim.
     closed = wall + [((1.5, 0.8), (1.5, 1.6))]
-    p = plan(scan_of(segments=closed), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), NavigatorSettings(), remembered)
+    p = plan(Situation(scan_of(segments=closed), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), remembered),
+             NavigatorSettings())
     assert p.way is None and p.aim_xy == (10.0, 0.0)
 
 
@@ -99,11 +103,11 @@ def test_a_pursued_turn_goes_on_the_way_it_turned_while_the_aim_swings_to_the_ot
     # next, and the robot turned left, then right, then left, for a minute.
     settings, none = NavigatorSettings(), numpy.zeros((0, 2))
     behind_right = (-0.6, -0.2)
-    v, w = _pursue(behind_right, none, FOOTPRINT, 0.0, 0.0, settings, 20)[:2]
+    v, w = pursue(behind_right, none, FOOTPRINT, 0.0, 0.0, settings, 20)[:2]
     assert v == 0.0 and w < 0                               # alone: toward it, to the right
-    v, w = _pursue(behind_right, none, FOOTPRINT, 0.0, 0.0, settings, 20, turning=1.0)[:2]
+    v, w = pursue(behind_right, none, FOOTPRINT, 0.0, 0.0, settings, 20, turning=1.0)[:2]
     assert v == 0.0 and w > 0                               # after a turn to the left: on to the left
-    v, w = _pursue((0.5, -0.3), none, FOOTPRINT, 0.0, 0.0, settings, 20, turning=1.0)[:2]
+    v, w = pursue((0.5, -0.3), none, FOOTPRINT, 0.0, 0.0, settings, 20, turning=1.0)[:2]
     assert v == 0.0 and w < 0                               # a little to the right (0.54 rad): toward it
 
 
@@ -192,8 +196,8 @@ def test_a_decision_at_720_rays_in_clutter_is_cheap():
 
 # --- the states, on injected time ----------------------------------------------------------------------------
 
-from closed_loop.control.move_check import BLIND_EXTRA_M  # noqa: E402
-from closed_loop.control.navigator import CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
+from closed_loop.control.navigation.move_check import BLIND_EXTRA_M  # noqa: E402
+from closed_loop.control.navigation.navigator import CLOSED_AHEAD_M, CLOSED_FOR_S, Navigator, NavState  # noqa: E402
 
 
 def test_reaching_the_goal_gives_zero_for_good():
@@ -228,10 +232,10 @@ def test_a_base_that_overshoots_its_turn_is_not_sent_more_of_it():
     # A skid-steer base measured at -1.8 rad/s after a command of -1.5, the goal ahead: the next command
     # steps from what was sent toward straight, not from the overshoot (which kept it spinning in place).
     s = NavigatorSettings()
-    p = plan(scan_of(), LASER, FOOTPRINT, 0.5, -1.8, (10.0, 0.0), s, previous=(0.5, -1.5))
+    p = plan(Situation(scan_of(), LASER, FOOTPRINT, 0.5, -1.8, (10.0, 0.0), previous=(0.5, -1.5)), s)
     assert p.angular_z == pytest.approx(-1.5 + s.yaw_accel / s.rate_hz)
     # A base held at rest (a watchdog's zero) after a command of 0.5 m/s: a period's step from rest.
-    p = plan(scan_of(), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), s, previous=(0.5, 0.0))
+    p = plan(Situation(scan_of(), LASER, FOOTPRINT, 0.0, 0.0, (10.0, 0.0), previous=(0.5, 0.0)), s)
     assert p.linear_x == pytest.approx(s.accel / s.rate_hz)
 
 
@@ -435,7 +439,7 @@ def test_a_recovery_with_no_move_that_keeps_the_margin_says_so():
 
 
 def test_backing_up_needs_a_scan_that_sees_behind():
-    from closed_loop.control.navigator import rear_seen
+    from closed_loop.control.navigation.trail import rear_seen
     full = scan_of()
     assert rear_seen(full, LASER)
     front_only = Scan(0.0, 'front_laser', -2.356, 2.356, 4.712 / 719, 0.0, 0.1, 0.1, 30.0, numpy.full(720, numpy.inf))
@@ -493,7 +497,7 @@ def test_the_chamfer_transform_never_overstates_by_more_than_its_allowance():
 def test_danger_is_the_rule_broken_by_any_scan_point():
     # in_danger looks only at points near the swept footprint; it must agree with every point of the scan taken
     # one by one, as safety's rule has it: a path into the margin of one, or closer to one already within it.
-    from closed_loop.control.move_check import in_danger
+    from closed_loop.control.navigation.move_check import in_danger
     from closed_loop.control.safety import CLEARANCE_EPS_M, footprint_clearances, steps_to_rest
     s = NavigatorSettings()
     rng = numpy.random.default_rng(11)
@@ -530,8 +534,8 @@ def test_following_the_way_where_the_window_would_stand_heads_along_it_and_keeps
         circles = [(rng.uniform(0.3, 3), rng.uniform(-1.5, 1.5), rng.uniform(0.05, 0.3)) for _ in range(25)]
         circles = [c for c in circles if math.hypot(c[0], c[1]) - c[2] > 0.3]
         scan = scan_of(circles=circles)
-        alone = plan(scan, LASER, JACKAL, 0.0, 0.0, (6.0, 0.0), s)
-        p = plan(scan, LASER, JACKAL, 0.0, 0.0, (6.0, 0.0), s, follow=True)
+        alone = plan(Situation(scan, LASER, JACKAL, 0.0, 0.0, (6.0, 0.0)), s)
+        p = plan(Situation(scan, LASER, JACKAL, 0.0, 0.0, (6.0, 0.0), follow=True), s)
         assert 'the way round' not in alone.reason
         if 'the way round' not in p.reason:
             assert (p.linear_x, p.angular_z) == (alone.linear_x, alone.angular_z)

@@ -5,12 +5,12 @@ import math
 import numpy
 import pytest
 
-from closed_loop.control import wavefront
+from closed_loop.control.navigation import wavefront
 from closed_loop.control.drawing import Drawing, Route
 from closed_loop.control.scan import scan_points
-from closed_loop.control.navigator import NavigatorSettings
+from closed_loop.control.navigation.navigator import NavigatorSettings
 from closed_loop.control.scan import Scan
-from closed_loop.control.scan_memory import CELL_M, ScanMemory
+from closed_loop.control.navigation.memory import CELL_M, ScanMemory
 from closed_loop.controllers import Context, Odom
 from closed_loop.controllers.avoid_obstacles import MAP_PERIOD_S, AvoidObstacles
 from closed_loop.controllers.fusion_controller import FusionController

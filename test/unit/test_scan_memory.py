@@ -6,7 +6,7 @@ import numpy
 
 from closed_loop.control.scan import scan_points
 from closed_loop.control.scan import Scan
-from closed_loop.control.scan_memory import CELL_M, ScanMemory
+from closed_loop.control.navigation.memory import CELL_M, ScanMemory
 from closed_loop.geometry import Pose2D
 
 LASER = Pose2D(0.0, 0.0, 0.0)

@@ -1,9 +1,9 @@
-"""The way a robot came (closed_loop.control.trail): the trail it keeps, and backing out along it."""
+"""The way a robot came (closed_loop.control.navigation.trail): the trail it keeps, and backing out along it."""
 import math
 
 import pytest
 
-from closed_loop.control.trail import (BACK_STRAIGHT_RAD, BACK_TURN_ONLY_RAD, TRAIL_LENGTH_M, TRAIL_STEP_M, Trail,
+from closed_loop.control.navigation.trail import (BACK_STRAIGHT_RAD, BACK_TURN_ONLY_RAD, TRAIL_LENGTH_M, TRAIL_STEP_M, Trail,
                                        back_toward)
 
 

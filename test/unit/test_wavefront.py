@@ -5,7 +5,7 @@ import cv2
 import numpy
 import pytest
 
-from closed_loop.control import wave_kernel, wavefront
+from closed_loop.control.navigation import wave_kernel, wavefront
 
 
 def image_wave(passable, start, goal):

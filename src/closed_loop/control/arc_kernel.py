@@ -1,8 +1,8 @@
-"""The local planner's arcs, compiled (numba), for ``closed_loop.control.local_planner.predict``: each candidate's
+"""The one motion predictor's loop, compiled (numba), for ``closed_loop.control.safety.predict``: each candidate's
 speeds ramped toward it at the accelerations for the horizon, then to zero at the same rates, and the poses
-they reach, integrated step by step. As numpy array operations a prediction was about thirty calls on arrays
-of a few hundred elements; here it is one call, with the same arithmetic in the same order (sums taken one
-step after another, as numpy's cumulative sum takes them), so the poses are the same to the bit.
+they reach, integrated step by step: one call for every candidate, with the arithmetic of the array form in
+the same order (sums taken one step after another, as numpy's cumulative sum takes them), so the poses are
+the same to the bit.
 
 Compiled by numba (``closed_loop.compiled``). Free of ROS.
 """

@@ -1,4 +1,4 @@
-"""The fusion controller's core: the navigator (``closed_loop.control.navigator``) with an eye for people (lesson
+"""The fusion controller's core: the navigator (``closed_loop.control.navigation.navigator``) with an eye for people (lesson
 exercise 3). Free of ROS.
 
 Each scan updates the tracks (``closed_loop.control.tracking``); the newest fresh camera detection, if any, is
@@ -19,7 +19,7 @@ import time
 
 from closed_loop.control.fusion import Belief, associate, belief, fresh_detection, in_path
 from closed_loop.control.loop import lasted
-from closed_loop.control.navigator import Navigator, NavState
+from closed_loop.control.navigation.navigator import Navigator, NavState
 from closed_loop.control.tracking import Tracker, clusters
 
 

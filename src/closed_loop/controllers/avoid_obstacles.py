@@ -1,4 +1,4 @@
-"""avoid_obstacles: the reactive navigator (``closed_loop.control.navigator``), the lesson's first exercise.
+"""avoid_obstacles: the reactive navigator (``closed_loop.control.navigation.navigator``), the lesson's first exercise.
 
 It goes to a goal around obstacles with the robot's footprint, or, with no goal, holds its start heading.
 The goal is ``goal_x``, ``goal_y`` (odom, m) where given, else ``goal_distance`` ahead of where it starts
@@ -19,12 +19,13 @@ import numpy
 
 from closed_loop.control.drawing import Drawing, Goal, Route, Shape
 from closed_loop.control.scan import scan_points
-from closed_loop.control.local_planner import NavigatorError, prepare
+from closed_loop.control.navigation.situation import NavigatorError
+from closed_loop.control.navigation.window import prepare
 from closed_loop.control.loop import stale_input
 from closed_loop.control.markers import arrow_end
-from closed_loop.control.move_check import in_danger
-from closed_loop.control.navigator import GoalSettings, Navigator, NavigatorSettings, NavState
-from closed_loop.control.scan_memory import CELL_M
+from closed_loop.control.navigation.move_check import in_danger
+from closed_loop.control.navigation.navigator import GoalSettings, Navigator, NavigatorSettings, NavState
+from closed_loop.control.navigation.memory import CELL_M
 from closed_loop.control.scan import ScanError, validate_scan
 from closed_loop.controllers import STOP, Controller, ControllerError
 
@@ -213,7 +214,7 @@ class AvoidObstacles(Controller):
             colours.append(SAFE_COLOUR if safe else UNSAFE_COLOUR)
         candidates = Shape('points', 'candidates', 1, scale=(0.04, 0.04, 0.0), points=tuple(ends),
                            colours=tuple(colours))
-        # The point the arcs were scored toward: a way round the obstacles to the goal (control.wavefront).
+        # The point the arcs were scored toward: a way round the obstacles to the goal (control.navigation.wavefront).
         aim = Shape('sphere', 'aim', 2, AIM_COLOUR, (0.15, 0.15, 0.15),
                     position=(float(plan.aim_xy[0]), float(plan.aim_xy[1]), DRAW_Z_M))
         return Drawing('base', (chosen, candidates, aim))

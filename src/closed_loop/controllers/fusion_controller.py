@@ -13,7 +13,7 @@ belief, red PERSON, grey STATIC, yellow UNKNOWN, and an arrow for its velocity).
 from closed_loop.control.drawing import Drawing, Note, Shape
 from closed_loop.control.fusion import Belief, CameraModel, FusionSettings, WaitSettings
 from closed_loop.control.fusion_navigator import FusionNavigator
-from closed_loop.control.navigator import GoalSettings
+from closed_loop.control.navigation.navigator import GoalSettings
 from closed_loop.control.tracking import TrackerSettings
 from closed_loop.controllers.avoid_obstacles import AvoidObstacles
 

@@ -1,4 +1,4 @@
-"""The escape's search, compiled (numba), for ``closed_loop.control.escape``: a hybrid A* for a rectangular
+"""The escape's search, compiled (numba), for ``closed_loop.control.navigation.escape``: a hybrid A* for a rectangular
 footprint over a distance field, with moves the robot can follow one at a time (a short run straight or on an
 arc, forward or back, or a turn in place), each checked at several poses along it.
 

@@ -1,9 +1,9 @@
-"""The navigator's escape from a pocket (``closed_loop.control.navigator``): after ESCAPE_AFTER_S without
+"""The navigator's escape from a pocket (``closed_loop.control.navigation.navigator``): after ESCAPE_AFTER_S without
 progress, a plan for the robot's footprint, heading first, over what it sees and remembers, to a point
-ESCAPE_AIM_M along the way it was following (``closed_loop.control.hybrid_kernel``'s search: short moves
+ESCAPE_AIM_M along the way it was following (``closed_loop.control.navigation.hybrid_kernel``'s search: short moves
 straight or on arcs, forward or back, and turns in place), followed one command at a time at SPEED_MPS (slower
 on an arc that asks a faster turn than MAX_TURN_RADPS). Each command is checked exactly
-(``closed_loop.control.move_check``) before it is sent, and slower where it is not safe (FALL_BACKS); a plan whose
+(``closed_loop.control.navigation.move_check``) before it is sent, and slower where it is not safe (FALL_BACKS); a plan whose
 next move is not safe for BLOCKED_S is dropped, and the next is asked for RETRY_S later.
 Free of ROS.
 """
@@ -13,7 +13,7 @@ import math
 import cv2
 import numpy
 
-from closed_loop.control.clearance_field import outline
+from closed_loop.control.navigation.clearance_field import outline
 from closed_loop.control.loop import lasted, outlasted
 
 #: Plan an escape once the robot has made no progress for this long (s), and again this long (s) after a plan
@@ -39,7 +39,7 @@ OUTLINE_M = 0.03
 #: Following: forward or back at this speed (m/s), turning in place at TURN_GAIN x the heading error between
 #: these rates (rad/s); a move's heading held with HEADING_GAIN and its line with CROSS_GAIN (rad/s per m). A
 #: move that asks a turn faster than MAX_TURN_RADPS (or the robot's limit, if lower) is driven slower on the
-#: same arc: the plan's arcs (hybrid_kernel, 1.96 rad a metre) ask 0.79 rad/s at SPEED_MPS.
+#: same arc (the plan's tightest arcs, ``hybrid_kernel``'s, ask less than that at SPEED_MPS).
 SPEED_MPS = 0.4
 MAX_TURN_RADPS = 1.0
 TURN_GAIN = 1.5
@@ -63,7 +63,7 @@ OFF_PLAN_M = 0.1
 
 
 def _kernel():
-    return importlib.import_module('closed_loop.control.hybrid_kernel')
+    return importlib.import_module('closed_loop.control.navigation.hybrid_kernel')
 
 
 def _wrap(angle):
@@ -127,7 +127,7 @@ def find_way(points, start, target, footprint, margin_m, doubtful=None, doubt=No
 
 def prepare():
     """The search loaded, and compiled on a machine's first use, before an escape asks for it
-    (``local_planner.prepare``)."""
+    (``window.prepare``)."""
     one = numpy.ones(1)
     _kernel().search(numpy.ones((3, 3)), 1.0, -1.0, -1.0, one, one, 0.5, 1.0, 0.0, numpy.zeros(3), numpy.ones(2),
                      0.1, 0.5, 0.5, 0.1, 1.0, 1.0, 10)

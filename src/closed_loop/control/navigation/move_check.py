@@ -1,17 +1,17 @@
 """Whether the command being followed is still safe (:func:`in_danger`), and the exact check of a move off the
-dynamic window (the navigator's final approach, recovery and escape, ``closed_loop.control.navigator``,
-``closed_loop.control.escape``): ``closed_loop.control.safety``'s rule against the current scan, and against
+dynamic window (the navigator's final approach, recovery and escape, ``closed_loop.control.navigation.navigator``,
+``closed_loop.control.navigation.escape``): ``closed_loop.control.safety``'s rule against the current scan, and against
 what the robot remembers where the scan cannot see. Free of ROS.
 """
 import numpy
 
-from closed_loop.control.local_planner import PREDICTION_STEP_S, predict, required_margin
+from closed_loop.control.navigation.situation import PREDICTION_STEP_S, predict, required_margin
 from closed_loop.control.safety import keeps_room, steps_to_rest
-from closed_loop.control.scan_memory import BLIND_EXTRA_M, blind_mask
+from closed_loop.control.navigation.memory import BLIND_EXTRA_M, blind_mask
 
-#: A move keeps BLIND_EXTRA_M (``scan_memory``'s), and BLIND_DRIFT_MPS for each second since it was seen,
-#: beyond the margin from a point remembered where the scan cannot see: among posts a Jackal's odometry drifted
-#: about 5 mm a second (0.37 m in 80 s of a BARN run, turning in pockets).
+#: A move keeps BLIND_EXTRA_M (``memory``'s), and BLIND_DRIFT_MPS for each second since it was seen,
+#: beyond the margin from a point remembered where the scan cannot see: odometry drifts while a skid-steer
+#: base turns in pockets (docs/benchmarks.md has the drift measured among posts).
 BLIND_DRIFT_MPS = 0.005
 
 
@@ -35,7 +35,7 @@ class MoveCheck:
 
     def safe(self, v, w, seconds, speed=None):
         """True if (v, w) followed for ``seconds`` and then braked keeps the margin for ``speed`` (default
-        ``v``; ``navigation.window.required_margin``) by the rule."""
+        ``v``; ``situation.required_margin``) by the rule."""
         s = self.settings
         steps = steps_to_rest(self.v0, self.w0, v, w, s.accel, s.yaw_accel, seconds, PREDICTION_STEP_S)
         poses = predict(self.v0, self.w0, numpy.array([v]), numpy.array([w]), s, seconds, steps)[0]

@@ -1,9 +1,9 @@
-"""The reactive navigator: its settings, and the states over the local planner (``closed_loop.control.local_planner``).
+"""The reactive navigator: its settings, and the states over the local planner (``closed_loop.control.navigation.window``).
 
 GOAL_SEEKING and AVOIDING follow the planner's choice; RECOVERING (close the place just ahead to the way
 for a while, back up where the scan sees the rear clear, back out while it has no room to turn (along the way it
 came, else straight or on an arc), then turn toward the side not tried last time) comes after ``stuck_timeout`` without progress;
-after ESCAPE_AFTER_S without progress, AVOIDING along an escape's plan for the footprint (``closed_loop.control.escape``);
+after ESCAPE_AFTER_S without progress, AVOIDING along an escape's plan for the footprint (``closed_loop.control.navigation.escape``);
 REACHED within ``goal_tolerance`` of the goal; FAILED after ``give_up_timeout`` without progress. With no
 goal the navigator holds the start heading. Time is injected, so every transition is tested with plain
 numbers. Free of ROS.
@@ -14,12 +14,14 @@ import math
 
 import numpy
 
-from closed_loop.control import escape
+from closed_loop.control.navigation import escape
 from closed_loop.control.scan import scan_points
-from closed_loop.control.local_planner import check_finite, plan, step_toward
-from closed_loop.control.move_check import MoveCheck
-from closed_loop.control.scan_memory import ScanMemory, from_frame, to_frame
-from closed_loop.control.trail import TRAIL_LOOKBACK_M, TRAIL_STEP_M, Trail, back_toward, rear_seen
+from closed_loop.control.navigation.situation import Situation, check_finite, step_toward
+from closed_loop.control.navigation.window import plan
+from closed_loop.control.navigation.move_check import MoveCheck
+from closed_loop.control.navigation.memory import ScanMemory, from_frame, to_frame
+from closed_loop.control.navigation.recovery import Recovery
+from closed_loop.control.navigation.trail import Trail
 from closed_loop.control.loop import LoopSettings, lasted
 from closed_loop.settings import SettingsError, param
 
@@ -97,22 +99,8 @@ FINAL_TURN_GAIN = 1.5
 FINAL_TURN_RADPS = 1.0
 FINAL_SPEED_GAIN = 1.0
 FINAL_DRIVE_RAD = 0.5
-#: Recovery: back up at this speed for this long (if the scan sees the rear clear); while turning in place is
-#: not safe, back out along the way it came (``closed_loop.control.trail``, what the map says is clear), or
-#: where that move is not safe or there is no trail, straight back or on a backing arc (each move checked
-#: against the scan and what it remembers), up to BACKOUT_M from where the recovery began and BACKOUT_S from
-#: its start; then turn in place at this rate for this long toward the side
-#: not tried last time (if turning is safe).
-BACKUP_SPEED_MPS = 0.15
-BACKUP_S = 1.0
-BACKOUT_M = 0.6
-BACKOUT_S = 8.0
-#: Where neither the way it came nor straight back keeps the margin, a backing arc at this turn rate (rad/s).
-BACKING_ARC_RADPS = 0.4
-RECOVERY_TURN_RADPS = 0.8
-RECOVERY_TURN_S = 2.0
 #: After this long (s) without progress, where the window would stand or turn in place, the way is followed
-#: instead, heading first (local_planner.plan's ``follow``).
+#: instead, heading first (``window.plan``'s ``follow``).
 FOLLOW_AFTER_S = 1.0
 #: Where it was stuck is closed to the way for CLOSED_FOR_S: a disc of CLOSED_RADIUS_M (drawn as points
 #: CLOSED_STEP_M apart round its centre, which the way keeps its half-width and margin from) CLOSED_AHEAD_M
@@ -181,6 +169,7 @@ class Navigator:
         self._way = None             # the way followed, (N, 2) in odom, kept while it stays open (wavefront.way)
         self._command = None         # the first step is taken from the measured speed
         self._escape = escape.Escape()
+        self._stalled = 0.0          # since the last progress (s), as the decision's progress stage last found
         if self.state is not NavState.GOAL_SEEKING and now_s is not None:
             self._enter(NavState.GOAL_SEEKING, now_s, 'new goal')
 
@@ -212,13 +201,13 @@ class Navigator:
         return self._points_of[2]
 
     def remembered(self):
-        """What it remembers of the scans, as :meth:`closed_loop.control.scan_memory.ScanMemory.occupancy` gives
+        """What it remembers of the scans, as :meth:`closed_loop.control.navigation.memory.ScanMemory.occupancy` gives
         it (odom)."""
         return self._memory.occupancy()
 
     def corridor(self, pose):
         """With no goal, the line along the start heading through the robot and ``hold_corridor``, in the
-        robot's frame (for :func:`closed_loop.control.wavefront.way`); None with a goal."""
+        robot's frame (for :func:`closed_loop.control.navigation.wavefront.way`); None with a goal."""
         if self.goal is not None:
             return None
         relative = self._start[2] - pose[2]
@@ -231,54 +220,79 @@ class Navigator:
         return step
 
     def _decide(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
+        """The stages of a decision (``closed_loop.control.navigation``), in order: the first with a command
+        gives it."""
         check_finite('now_s', now_s)
         check_finite('pose', *pose)
-        s = self.settings
         if self.state in (NavState.REACHED, NavState.FAILED):
             return Step(self.state, 0.0, 0.0, self.state.name.lower())
         goal_local, progress = self.target(pose)
-        if self.goal is not None and math.hypot(*goal_local) <= s.goal_tolerance:
-            self._enter(NavState.REACHED, now_s, 'within %.2f m of the goal' % math.hypot(*goal_local))
+        sit = Situation(scan, laser_pose, footprint, v0, w0, goal_local, previous=self._command)
+        for stage in (self._arrived, self._progress, self._recovering, self._perceive, self._escaping,
+                      self._approaching, self._planning):
+            step = stage(now_s, pose, sit, progress)
+            if step is not None:
+                return step
+        raise AssertionError('the window always answers')
+
+    def _arrived(self, now_s, pose, sit, progress):
+        """REACHED within ``goal_tolerance`` of the goal."""
+        distance = math.hypot(*sit.goal_xy)
+        if self.goal is not None and distance <= self.settings.goal_tolerance:
+            self._enter(NavState.REACHED, now_s, 'within %.2f m of the goal' % distance)
             return Step(self.state, 0.0, 0.0, 'reached')
+        return None
+
+    def _progress(self, now_s, pose, sit, progress):
+        """The progress timers (``stalled``: since the last progress), FAILED after ``give_up_timeout`` without
+        it; the way it came, while it is not recovering."""
         if self._progress_s is None or self._best is None or progress > self._best + PROGRESS_M \
                 or now_s < self._progress_s:
             self._best = progress if self._best is None else max(progress, self._best)
             self._progress_s = self._stuck_from_s = now_s
-        stalled = now_s - self._progress_s
-        if lasted(stalled, s.give_up_timeout):
-            self._enter(NavState.FAILED, now_s, 'no progress for %.1f s (give_up_timeout)' % stalled)
+        self._stalled = now_s - self._progress_s
+        if lasted(self._stalled, self.settings.give_up_timeout):
+            self._enter(NavState.FAILED, now_s, 'no progress for %.1f s (give_up_timeout)' % self._stalled)
             return Step(self.state, 0.0, 0.0, 'failed')
         if self.state is not NavState.RECOVERING:
             self._trail.add(pose[0], pose[1])
-        if self.state is NavState.RECOVERING:
-            step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
-            if step is not None:
-                return step
-        elif lasted(now_s - self._stuck_from_s, s.stuck_timeout) and not self._escape.active:
-            self._recovery = {'started_s': now_s, 'side': self._side, 'turn_s': None, 'from': pose[:2],
-                              'end': self._trail.back(BACKOUT_M) if len(self._trail) > 1 else None}
+        return None
+
+    def _recovering(self, now_s, pose, sit, progress):
+        """The recovery's command while it goes on; one begins after ``stuck_timeout`` without progress (unless an
+        escape is under way), closing the place just ahead to the way."""
+        if self.state is not NavState.RECOVERING:
+            if not lasted(now_s - self._stuck_from_s, self.settings.stuck_timeout) or self._escape.active:
+                return None
+            self._recovery = Recovery(now_s, self._side, pose, self._trail)
             self._way = None
             self._side = -self._side
             self._closed.append(((pose[0] + CLOSED_AHEAD_M * math.cos(pose[2]),
                                   pose[1] + CLOSED_AHEAD_M * math.sin(pose[2])), now_s + CLOSED_FOR_S))
             self._enter(NavState.RECOVERING, now_s, 'no progress for %.1f s (stuck_timeout): the place %.2f m '
-                        'ahead is closed to the way for %.0f s' % (stalled, CLOSED_AHEAD_M, CLOSED_FOR_S))
-            step = self._recover(now_s, pose, v0, w0, scan, laser_pose, footprint)
-            if step is not None:
-                return step
-        if scan is not self._remembered_scan:
-            self._remembered_scan, self._scanned = scan, self.scanned(scan, laser_pose)
-            self._memory.add(now_s, pose, self._scanned, scan, laser_pose, footprint)
-        step = self._escaping(now_s, pose, v0, w0, scan, laser_pose, footprint, stalled, goal_local)
-        if step is not None:
-            return step
-        if self.goal is not None and math.hypot(*goal_local) < FINAL_APPROACH_M:
-            step = self._final_approach(now_s, pose, goal_local, v0, w0, scan, laser_pose, footprint)
-            if step is not None:
-                return step
-        p = plan(scan, laser_pose, footprint, v0, w0, goal_local, s, self._memory.points(pose), self._turning,
-                 self._scanned, self._command, self.corridor(pose), self._closed_points(now_s, pose),
-                 None if self._way is None else to_frame(self._way, pose), stalled >= FOLLOW_AFTER_S)
+                        'ahead is closed to the way for %.0f s' % (self._stalled, CLOSED_AHEAD_M, CLOSED_FOR_S))
+        return self._recover(now_s, pose, sit)
+
+    def _perceive(self, now_s, pose, sit, progress):
+        """The newest scan into what it remembers (once a scan); never a command."""
+        if sit.scan is not self._remembered_scan:
+            self._remembered_scan, self._scanned = sit.scan, self.scanned(sit.scan, sit.laser_pose)
+            self._memory.add(now_s, pose, self._scanned, sit.scan, sit.laser_pose, sit.footprint)
+        return None
+
+    def _approaching(self, now_s, pose, sit, progress):
+        if self.goal is not None and math.hypot(*sit.goal_xy) < FINAL_APPROACH_M:
+            return self._final_approach(now_s, pose, sit)
+        return None
+
+    def _planning(self, now_s, pose, sit, progress):
+        """The dynamic window's choice (``window.plan``), with what it remembers, the places closed to the way,
+        the way followed so far, and whether to follow it (FOLLOW_AFTER_S without progress)."""
+        p = plan(dataclasses.replace(
+            sit, remembered=self._memory.points(pose), scanned=self._scanned, turning=self._turning,
+            corridor=self.corridor(pose), closed=self._closed_points(now_s, pose),
+            kept_way=None if self._way is None else to_frame(self._way, pose),
+            follow=self._stalled >= FOLLOW_AFTER_S), self.settings)
         self._way = None if p.way is None else from_frame(p.way.route(), pose)
         self._turning = math.copysign(1.0, p.target[1]) if p.kind == 'turn' else 0.0
         if p.kind == 'goal' and self.goal is None:      # (its aim is a point ahead on the start heading, no goal)
@@ -298,19 +312,17 @@ class Navigator:
                                                                                      numpy.sin(around)))))
         return to_frame(numpy.concatenate([disc + xy for xy, _ in self._closed]), pose)
 
-    def _final_approach(self, now_s, pose, goal_local, v0, w0, scan, laser_pose, footprint):
+    def _final_approach(self, now_s, pose, sit):
         """The last metre, where the window's coarse speeds would circle the goal: turn toward it, and drive
         at it slower the closer it is, if that path keeps the margin (``move_check.MoveCheck``); else None."""
-        s = self.settings
-        distance, bearing = math.hypot(*goal_local), math.atan2(goal_local[1], goal_local[0])
+        s, v0, w0 = self.settings, sit.v0, sit.w0
+        distance, bearing = math.hypot(*sit.goal_xy), math.atan2(sit.goal_xy[1], sit.goal_xy[0])
         w = max(-FINAL_TURN_RADPS, min(FINAL_TURN_RADPS, s.max_yaw_rate, FINAL_TURN_GAIN * bearing))
         v = 0.0 if abs(bearing) > FINAL_DRIVE_RAD else min(s.max_speed, FINAL_SPEED_GAIN * distance) * math.cos(bearing)
-        check = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self.scanned(scan, laser_pose),
-                          self._memory.points(pose), self._memory.t, now_s)
-        if not check.safe(v, w, s.horizon, speed=max(v, abs(v0))):
+        if not self._check(now_s, pose, sit).safe(v, w, s.horizon, speed=max(v, abs(v0))):
             return None
         period_s = 1.0 / s.rate_hz
-        # One period's step toward (v, w), as the window's (local_planner.step_toward).
+        # One period's step toward (v, w), as the window's (``situation.step_toward``).
         prev_v, prev_w = (None, None) if self._command is None else self._command
         v = step_toward(v, prev_v, v0, s.accel, period_s, s.max_speed)
         w = step_toward(w, prev_w, w0, s.yaw_accel, period_s, s.max_yaw_rate)
@@ -319,18 +331,24 @@ class Navigator:
         self._enter(NavState.GOAL_SEEKING, now_s, why)
         return Step(NavState.GOAL_SEEKING, v, w, why)
 
-    def _escaping(self, now_s, pose, v0, w0, scan, laser_pose, footprint, stalled, goal_local):
-        """The escape's command (``closed_loop.control.escape``), as one period's step, or None."""
-        s = self.settings
-        if not self._escape.due(now_s, stalled):
+    def _check(self, now_s, pose, sit, scanned=None):
+        """The ``move_check.MoveCheck`` of moves now: the scan's points and what is remembered where it cannot
+        see."""
+        return MoveCheck(self.settings, sit.footprint, sit.v0, sit.w0, sit.scan, sit.laser_pose,
+                         self.scanned(sit.scan, sit.laser_pose) if scanned is None else scanned,
+                         self._memory.points(pose), self._memory.t, now_s)
+
+    def _escaping(self, now_s, pose, sit, progress):
+        """The escape's command (``closed_loop.control.navigation.escape``), as one period's step, or None."""
+        s, v0, w0 = self.settings, sit.v0, sit.w0
+        if not self._escape.due(now_s, self._stalled):
             return None
         route = None if self._way is None else to_frame(self._way, pose)
-        check = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self._scanned, self._memory.points(pose),
-                          self._memory.t, now_s)
+        check = self._check(now_s, pose, sit, self._scanned)
         cmd = self._escape.command(
             now_s, pose, lambda: (numpy.concatenate((from_frame(self._scanned, pose), self._memory.xy)),
                                   from_frame(check.blind, pose), check.doubt),
-            tuple(from_frame(numpy.array([escape.aim(route, goal_local)]), pose)[0]), footprint,
+            tuple(from_frame(numpy.array([escape.aim(route, sit.goal_xy)]), pose)[0]), sit.footprint,
             s.safety_margin + escape.PLAN_ROOM_M, check, s.horizon, (s.max_speed, s.max_yaw_rate))
         if cmd is None:
             return None
@@ -341,36 +359,14 @@ class Navigator:
         self._enter(NavState.AVOIDING, now_s, cmd[2])
         return Step(NavState.AVOIDING, v, w, cmd[2], route=self._escape.route())
 
-    def _recover(self, now_s, pose, v0, w0, scan, laser_pose, footprint):
-        """The recovery's command now, or None when it is over (then seek again, with a fresh timer)."""
-        s = self.settings
-        elapsed = now_s - self._recovery['started_s']
-        safe = MoveCheck(s, footprint, v0, w0, scan, laser_pose, self.scanned(scan, laser_pose),
-                         self._memory.points(pose), self._memory.t, now_s).safe
-        r = self._recovery
-        turn = r['side'] * RECOVERY_TURN_RADPS
-        if r['turn_s'] is None:
-            end = r['end']
-            if not lasted(elapsed, BACKUP_S) and rear_seen(scan, laser_pose):
-                if safe(-BACKUP_SPEED_MPS, 0.0, BACKUP_S - elapsed):
-                    return Step(NavState.RECOVERING, -BACKUP_SPEED_MPS, 0.0, 'backing up')
-            elif not lasted(elapsed, BACKOUT_S) and math.hypot(r['from'][0] - pose[0], r['from'][1] - pose[1]) < BACKOUT_M \
-                    and not safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S)):
-                # No room to turn: back out the way it came, or else straight back or on a backing arc.
-                moves = [(-BACKUP_SPEED_MPS, 0.0, 'backing straight out')] + [
-                    (-BACKUP_SPEED_MPS, side * BACKING_ARC_RADPS, 'backing out on an arc')
-                    for side in (r['side'], -r['side'])]
-                if end is not None and math.hypot(end[0] - pose[0], end[1] - pose[1]) > TRAIL_STEP_M:
-                    self._trail.drop_behind(pose[0], pose[1])
-                    moves.insert(0, back_toward(pose, self._trail.back(TRAIL_LOOKBACK_M), BACKUP_SPEED_MPS,
-                                                s.max_yaw_rate) + ('backing out the way it came',))
-                for v, w, what in moves:
-                    if safe(v, w, BACKUP_S):
-                        return Step(NavState.RECOVERING, v, w, what + ': no room to turn here')
-            r['turn_s'] = now_s
-        if not lasted(now_s - r['turn_s'], RECOVERY_TURN_S) and safe(0.0, turn, min(s.horizon, RECOVERY_TURN_S -
-                                                                              (now_s - r['turn_s']))):
-            return Step(NavState.RECOVERING, 0.0, turn, 'turning to try the other side')
+    def _recover(self, now_s, pose, sit):
+        """The recovery's command now (``recovery.Recovery``), or None when it is over (then seek again, with a
+        fresh timer)."""
+        move = self._recovery.command(now_s, pose, sit, self._check(now_s, pose, sit).safe, self._trail,
+                                      self.settings)
+        if move is not None:
+            return Step(NavState.RECOVERING, *move)
+        elapsed = now_s - self._recovery.started_s
         self._recovery = None
         self._stuck_from_s = now_s
         self._enter(NavState.GOAL_SEEKING, now_s, 'recovery done' if elapsed > 0.0 else

@@ -1,4 +1,4 @@
-"""The way's wave, compiled (numba), for ``closed_loop.control.wavefront``: a breadth-first wave from the goal's
+"""The way's wave, compiled (numba), for ``closed_loop.control.navigation.wavefront``: a breadth-first wave from the goal's
 cell over passable cells, alternating 8- and 4-neighbour steps (the octagonal distance), stopped once it has
 reached the start's cell. As OpenCV calls it was four calls a round, about 30 rounds a wave, each call's fixed
 cost far above its few hundred cells' work; here it is one call, and the same rounds to the cell.

@@ -1,6 +1,6 @@
 """The reactive navigator's local planner: a dynamic window over (v, w), each candidate's path predicted and
 checked against the scan with the robot's footprint rectangle, the safe ones scored toward the goal. Its
-settings and the states on top are in ``closed_loop.control.navigator``.
+settings and the states on top are in ``closed_loop.control.navigation.navigator``.
 
 Why a dynamic window (Fox, Burgard and Thrun 1997; ROS's dwa_local_planner): it plans in the robot's own
 command space, so speed and acceleration limits hold by construction; it judges a command by the path the
@@ -22,8 +22,9 @@ how much room it keeps, how fast it goes, and how long it runs before it would c
 The robot re-plans every period, so the long arc is a preference, the short one a guarantee.
 
 The clearance comes from a distance transform of the scan points on a local grid, read at points along the
-footprint's outline (``closed_loop.control.clearance_field``), so a decision costs a few milliseconds at 720 rays (``make bench``). Free
-of ROS.
+footprint's outline (``clearance_field``), so a decision costs a few milliseconds at 720 rays (``make bench``).
+What a decision knows comes in one :class:`closed_loop.control.navigation.situation.Situation`; :func:`plan` runs
+the window's stages in order, each a function of its own. Free of ROS.
 """
 import dataclasses
 import functools
@@ -32,17 +33,14 @@ import math
 
 import numpy
 
-from closed_loop.control import wavefront
-from closed_loop.control.clearance_field import (FIELD_ERROR_M, OUTLINE_STEP_M, DistanceField, clearances, edge_clearance,
-                                         keeps_margin, outline32)
-from closed_loop.control import safety
-from closed_loop.control.scan import scan_points
+from closed_loop.control.navigation import wavefront
+from closed_loop.control.navigation.clearance_field import (FIELD_ERROR_M, OUTLINE_STEP_M, DistanceField, clearances,
+                                                            edge_clearance, keeps_margin, outline32)
+from closed_loop.control.navigation.memory import BLIND_EXTRA_M
+from closed_loop.control.navigation.pursuit import pursue
+from closed_loop.control.navigation.situation import (PREDICTION_STEP_S, check_finite, predict, step_toward)
 from closed_loop.control.safety import footprint_clearance, keeps_room, point_clearances
-from closed_loop.control.scan_memory import BLIND_EXTRA_M, blind_points
 
-#: Step between predicted poses (s): between two poses an obstacle point cannot slip through more than the
-#: margin allows.
-PREDICTION_STEP_S = 0.1
 #: Largest gap between samples of the footprint's outline on the longer arcs that are only scored (m).
 PREFERENCE_OUTLINE_STEP_M = 0.2
 #: Step between the poses of the longer arcs that are only scored (s).
@@ -63,24 +61,13 @@ EXACT_CHECKS = 4
 AIM_SIDE_RAD = 0.2
 #: Already within the margin, a turn in place must open the clearance by this much (m) by the time it is at
 #: rest, not only keep it: judged on what the scan sees of an obstacle, a turn that keeps its clearance can
-#: bring a side the scan does not see closer (a Jackal's rear corner crept into a post at 0.03 rad/s).
+#: bring a side the scan does not see closer (a rear corner creeping round into a post).
 WITHIN_MARGIN_OPEN_M = 0.003
 #: With a corridor (no goal), this near (m) to where its line is closed off, the robot stops: blocked.
 BLOCKED_STOP_M = 0.3
-#: Following the way where the window would stand: turn in place toward the aim while it lies more than
-#: PURSUIT_TURN_RAD to a side (at the first of PURSUIT_TURN_RADPS that keeps the margin), else drive an arc
-#: through it at the first of PURSUIT_SPEEDS (x max_speed) that does.
-PURSUIT_TURN_RAD = 0.3
-PURSUIT_KEEP_RAD = 1.5
-PURSUIT_TURN_RADPS = (0.8, 0.4)
-PURSUIT_SPEEDS = (0.5, 0.25, 0.125)
 #: Candidates per axis of the window.
 LINEAR_SAMPLES = 5
 ANGULAR_SAMPLES = 15
-
-
-class NavigatorError(ValueError):
-    """Unusable input to the planner (a bad pose, goal or speed)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,7 +75,7 @@ class Plan:
     """The planner's answer: the command (m/s, rad/s), what it is and why, the chosen path's least
     clearance (m), the predicted poses of the chosen command ((K, 3) x, y, yaw in the robot's frame), and
     every candidate's (v, w, clearance, safe), the point aimed at and the way to the goal it lies on
-    (``closed_loop.control.wavefront.Way``, None where the scan showed none), for display."""
+    (``closed_loop.control.navigation.wavefront.Way``, None where the scan showed none), for display."""
     linear_x: float
     angular_z: float
     kind: str          # 'goal' (heading for it), 'avoid' (steering around), 'turn' (in place), 'stop'
@@ -101,18 +88,12 @@ class Plan:
     way: object = None
 
 
-def predict(v0, w0, v, w, settings, horizon_s, steps, step_s=PREDICTION_STEP_S):
-    """Poses (C, K, 3) float32 for candidates ``v``, ``w`` (C,) from (v0, w0): ``safety.predict`` at the
-    settings' accelerations (``accel``, ``yaw_accel``)."""
-    return safety.predict(v0, w0, v, w, settings.accel, settings.yaw_accel, horizon_s, steps, step_s)
-
-
 def prepare():
     """The planner's compiled parts (``arc_kernel``, the way's ``wave_kernel``, the navigator's escape's
     ``hybrid_kernel``) loaded, and compiled on a machine's first use (a few seconds), before a decision asks
     for them: a controller calls it as it is made, so its first decision is not the one that waits."""
     wavefront.prepare()
-    importlib.import_module('closed_loop.control.escape').prepare()
+    importlib.import_module('closed_loop.control.navigation.escape').prepare()
     kernel = importlib.import_module('closed_loop.control.arc_kernel')
     poses = kernel.predict(0.0, 0.0, numpy.zeros(1), numpy.zeros(1), 1.0, 1.0, 0.1, 1, 0.1)
     one, none = numpy.ones((1, 1), numpy.float32), numpy.zeros(1, numpy.float32)
@@ -130,59 +111,6 @@ def candidate_speeds(max_speed, max_yaw_rate):
     v, w = (a.ravel() for a in numpy.meshgrid(vs, ws))
     v.flags.writeable = w.flags.writeable = False
     return v, w
-
-
-def _pursue(aim_xy, near, footprint, v0, w0, s, steps, turning=0.0):
-    """Toward ``aim_xy`` (the robot's frame) along the way, heading first: a turn in place while it lies more
-    than PURSUIT_TURN_RAD to a side, else an arc through it at the fastest of PURSUIT_SPEEDS (x
-    ``max_speed``) whose path keeps the margin (``safety.keeps_room``); (v, w, predicted poses, their clearance, why),
-    or None when none keeps it. ``turning``: the side (+1 left, -1 right) of a turn in place at the last
-    decision, which goes on while the aim lies more than PURSUIT_KEEP_RAD to the other side (an aim that
-    swings between ahead and behind from one scan to the next would turn the robot back and forth)."""
-    distance, bearing = math.hypot(*aim_xy), math.atan2(aim_xy[1], aim_xy[0])
-    if abs(bearing) > PURSUIT_TURN_RAD:
-        side = turning if turning and abs(bearing) > PURSUIT_KEEP_RAD else math.copysign(1.0, bearing)
-        options = [(0.0, side * min(s.max_yaw_rate, rate)) for rate in PURSUIT_TURN_RADPS]
-        why = 'turning in place toward the way round (%.2f rad off)' % bearing
-    else:
-        curvature = 2.0 * aim_xy[1] / max(distance ** 2, 1e-9)
-        options = [(f * s.max_speed, max(-s.max_yaw_rate, min(s.max_yaw_rate, f * s.max_speed * curvature)))
-                   for f in PURSUIT_SPEEDS]
-        why = 'following the way round %.2f m to its aim' % distance
-    for v, w in options:
-        poses = predict(v0, w0, numpy.array([v]), numpy.array([w]), s, s.horizon, steps)[0]
-        safe, clearance = keeps_room(near, footprint, poses, required_margin(s, max(v, abs(v0))))
-        if safe:
-            return v, w, poses, clearance, why
-    return None
-
-
-def required_margin(settings, speed):
-    """The clearance (m) a path driven at ``speed`` (m/s, the faster of the command's and the robot's) must
-    keep: ``safety_margin`` at rest, ``margin_per_speed`` more per m/s (a base at speed strays farther
-    from the predicted arc: a skid-steer one turns less than its wheels say)."""
-    return settings.safety_margin + settings.margin_per_speed * abs(speed)
-
-
-def check_finite(name, *values):
-    for value in values:
-        if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-            raise NavigatorError('%s: expected finite numbers, got %r' % (name, values))
-
-
-def step_toward(target, previous, measured, rate, period_s, limit):
-    """One period's step of a speed toward ``target``, at most ``rate`` x ``period_s``, from the command
-    sent last (``previous``; None: the ``measured`` speed), and never more than that step above the
-    measured speed in magnitude, nor beyond +-``limit``.
-
-    From the measured speed alone, a base that overshoots its command (a skid-steer one, in a turn) would
-    be sent ever more of it; the magnitude bound keeps a base held back (stopped by a watchdog) from
-    being sent a jump the plan did not predict."""
-    step = rate * period_s
-    base = measured if previous is None else previous
-    value = min(max(target, base - step), base + step)
-    reach = min(abs(measured) + step, limit)
-    return float(min(max(value, -reach), reach))
 
 
 def _confirm(score, safe, maybe, near, footprint, poses, margin):
@@ -204,33 +132,59 @@ def _confirm(score, safe, maybe, near, footprint, poses, margin):
     return best if safe[best] else None
 
 
-def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None, turning=0.0, scanned=None,
-         previous=None, corridor=None, closed=None, kept_way=None, follow=False):
-    """The command for now: a :class:`Plan`.
+@dataclasses.dataclass
+class _Window:
+    """The candidates of one decision and what is known of each (the arrays of :func:`_window`)."""
+    v: numpy.ndarray
+    w: numpy.ndarray
+    clear: numpy.ndarray          # least clearance along each safety path (the grid's)
+    margin: numpy.ndarray         # the margin each must keep
+    safe: numpy.ndarray
+    maybe: numpy.ndarray          # within the grid's error of its margin: checked exactly if it scores best
+    safe_poses: numpy.ndarray     # followed for the horizon, then braked
+    safe_steps: int
+    arcs: numpy.ndarray           # followed for the lookahead (scored only)
+    along: numpy.ndarray          # clearance along the arcs (the grid's)
+    long_steps: int
+    near: numpy.ndarray           # the points a path can come near
+    now: float                    # the footprint's clearance now
+    candidates: numpy.ndarray     # (v, w, clearance, safe), for display
 
-    ``scan``: a :class:`closed_loop.control.scan.Scan` (REP 117); ``laser_pose``: the laser's pose in the base
-    frame (:class:`closed_loop.geometry.Pose2D`); ``footprint``: the robot's rectangle; ``v0``,
-    ``w0``: the robot's speeds now (m/s, rad/s); ``goal_xy``: the goal in the robot's frame (m);
-    ``remembered``: (M, 2) points of earlier scans in the robot's frame (``closed_loop.control.scan_memory``), used
-    to choose the way around, and for safety only where the scanner cannot see now; ``turning``: +1 or -1 while the last decision was a
-    turn in place that way (it goes on that way rather than swing back and forth between two ways
-    round), 0 otherwise; ``scanned``: the scan's points in the robot's frame if already computed;
-    ``previous``: the command sent last (m/s, rad/s), which the step is taken from; ``corridor``: where
-    the way round may go (``closed_loop.control.wavefront.aim``'s), None for anywhere; ``closed``: points
-    (M, 2, the robot's frame) the way keeps off as it does the scan's (places closed to it), never for safety;
-    ``kept_way``: (N, 2) the way followed until now, in the robot's frame (``closed_loop.control.wavefront.way``'s
-    ``kept``); ``follow``: where the window would stand or turn in place, follow the way instead, heading first
-    (the navigator asks this once it has made no progress for a while).
-    """
-    check_finite('v0, w0', v0, w0)
-    check_finite('goal_xy', *goal_xy)
-    s = settings
-    scanned = scan_points(scan, laser_pose) if scanned is None else scanned
-    # Where the scanner cannot see (behind a LIDAR of less than a full turn), what was seen there before
-    # is the best knowledge there is: remembered points in that blind sector count for safety too, so a
-    # turn does not swing the robot's back into something it saw a moment ago.
-    blind = blind_points(remembered, scan, laser_pose) if remembered is not None and len(remembered) else scanned[:0]
-    points = numpy.concatenate((scanned, blind)) if len(blind) else scanned
+
+def plan(situation, settings):
+    """The command for now (a :class:`Plan`) in ``situation`` (a ``situation.Situation``), by the stages of the
+    module's docstring: the candidates and their safety (:func:`_window`), what they are scored toward
+    (:func:`_aim`), the score and the exact check of the best (:func:`_choose`), a turn in place instead of
+    standing (:func:`_turn_instead`), following the way instead (``pursuit.pursue``), and one period's step
+    toward the choice (:func:`_command`)."""
+    sit, s = situation, settings
+    check_finite('v0, w0', sit.v0, sit.w0)
+    check_finite('goal_xy', *sit.goal_xy)
+    scanned, blind, points = sit.points()
+    win = _window(sit, s, points, blind)
+    way, aim_xy, stop = _aim(sit, s, scanned, win)
+    if stop is not None:
+        return stop
+    if not (win.safe | win.maybe).any():
+        return _stop(win, s, aim_xy, way)
+    best, free, heading = _choose(sit, s, win, aim_xy)
+    if best is None:
+        return _stop(win, s, aim_xy, way)
+    best = _turn_instead(sit, win, best, free, aim_xy)
+    followed = None
+    if sit.follow and win.v[best] == 0.0 and way is not None and win.now >= s.safety_margin:
+        # The window would stand or turn in place, yet a way is there: follow it, heading first (a narrow gap
+        # scores low on room for every arc through it, however the way leads there).
+        followed = pursue(aim_xy, win.near, sit.footprint, sit.v0, sit.w0, s, win.safe_steps, sit.turning)
+    return _command(sit, s, win, best, free, heading, followed, aim_xy, way)
+
+
+def _window(sit, s, points, blind):
+    """The candidates over the whole speed range, each predicted with the ramp from the speeds now at the
+    accelerations, followed for the horizon then braked (safety) and for the lookahead (preference); each one's
+    clearance on the distance grid against its margin (``required_margin``), and within the margin already,
+    the turns in place the rule allows."""
+    footprint, v0, w0 = sit.footprint, sit.v0, sit.w0
     top_v, top_w = max(s.max_speed, abs(v0)), max(s.max_yaw_rate, abs(w0))
     # Followed for the horizon, then both speeds brake at once: at rest after the longer of the two.
     safe_steps = int(math.ceil((s.horizon + max(top_v / s.accel, top_w / s.yaw_accel)) / PREDICTION_STEP_S)) + 1
@@ -275,15 +229,21 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     arcs = predict(v0, w0, v, w, s, s.lookahead, long_steps, PREFERENCE_STEP_S)
     along = clearances(field, coarse, arcs, PREFERENCE_OUTLINE_STEP_M)
     candidates = numpy.column_stack((v, w, clear, safe))
+    return _Window(v, w, clear, margin, safe, maybe, safe_poses, safe_steps, arcs, along, long_steps, near, now,
+                   candidates)
 
-    goal_distance = math.hypot(*goal_xy)
-    # What the arcs are scored toward: a point along the way to the goal through the free space the scan
-    # shows (closed_loop.control.wavefront), else through what the newest scan alone shows (SCAN_WAY_ROOM_M),
-    # or the goal itself when neither shows one.
+
+def _aim(sit, s, scanned, win):
+    """(the way, the point the arcs are scored toward, a stopping :class:`Plan` or None): a point along the way
+    to the goal through the free space the scan shows (``wavefront``), else through what the newest scan alone
+    shows (SCAN_WAY_ROOM_M), or the goal itself when neither shows one; with a corridor closed off ahead, a stop
+    before it."""
+    footprint, goal_xy, corridor = sit.footprint, sit.goal_xy, sit.corridor
     half_width = 0.5 * (footprint.y_max - footprint.y_min) + s.safety_margin + AIM_ROOM_M
-    seen = numpy.concatenate([scanned] + [extra for extra in (remembered, closed) if extra is not None and len(extra)])
+    seen = numpy.concatenate([scanned] + [extra for extra in (sit.remembered, sit.closed)
+                                          if extra is not None and len(extra)])
     way = wavefront.way(seen, goal_xy, half_width, max(1.0, s.max_speed * s.lookahead),
-                        0.5 * (footprint.y_max - footprint.y_min), corridor, kept_way)
+                        0.5 * (footprint.y_max - footprint.y_min), corridor, sit.kept_way)
     if way is None and corridor is None:
         way = wavefront.way(scanned, goal_xy, 0.5 * (footprint.y_max - footprint.y_min) + SCAN_WAY_ROOM_M,
                             max(1.0, s.max_speed * s.lookahead), 0.5 * (footprint.y_max - footprint.y_min))
@@ -294,13 +254,27 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
         if math.hypot(*way.goal) <= BLOCKED_STOP_M + 1e-9:     # the line's points are sums of half cells
             why = ('the way along the start heading is closed off %.2f m ahead (no way round within '
                    'hold_corridor): stopped before it' % math.hypot(*way.goal))
-            return Plan(0.0, 0.0, 'stop', why, now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)
+            return way, aim_xy, Plan(0.0, 0.0, 'stop', why, win.now, numpy.zeros((1, 3)), win.candidates,
+                                     tuple(aim_xy), way=way)
         if way.aim == way.goal:
             aim_xy = goal_xy
-    if not (safe | maybe).any():
-        return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
-                    '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
-                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)
+    return way, aim_xy, None
+
+
+def _stop(win, s, aim_xy, way):
+    return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
+                '(safety_margin %.2f m)' % (max(float(win.clear.max()), 0.0), s.safety_margin),
+                win.now, numpy.zeros((1, 3)), win.candidates, tuple(aim_xy), way=way)
+
+
+def _choose(sit, s, win, aim_xy):
+    """(the best candidate that is safe, or None; each one's free share of its arc; its heading toward the aim):
+    each candidate scored on where its arc points (toward the aim), how much closer it gets, how much room it
+    keeps and how fast it goes, for the free part of its arc; the best checked exactly where the grid doubts
+    it (:func:`_confirm`)."""
+    v, w, along, arcs, long_steps = win.v, win.w, win.along, win.arcs, win.long_steps
+    safe, maybe = win.safe, win.maybe
+    goal_distance = math.hypot(*sit.goal_xy)
     # How long each arc runs before it would come within the margin (1: the whole lookahead), and where its
     # free part comes closest to the goal (its end, unless it passes the goal): how far that is, how much
     # closer than now, pointing how well at the goal, with how much room around it.
@@ -323,12 +297,15 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
     score = (free * (s.heading_weight * heading + s.speed_weight * speed) + s.progress_weight * progress
              + s.clearance_weight * room)
     score = numpy.where(safe | maybe, score, -numpy.inf)
-    best = _confirm(score, safe, maybe, near, footprint, safe_poses, margin)
-    candidates[:, 3] = safe
-    if best is None:
-        return Plan(0.0, 0.0, 'stop', 'no safe command: every path comes within %.2f m of an obstacle '
-                    '(safety_margin %.2f m)' % (max(float(clear.max()), 0.0), s.safety_margin),
-                    now, numpy.zeros((1, 3)), candidates, tuple(aim_xy), way=way)
+    best = _confirm(score, safe, maybe, win.near, sit.footprint, win.safe_poses, win.margin)
+    win.candidates[:, 3] = safe
+    return best, free, heading
+
+
+def _turn_instead(sit, win, best, free, aim_xy):
+    """``best``, or a turn in place where standing still beats every way forward."""
+    v, w, safe, maybe, candidates = win.v, win.w, win.safe, win.maybe, win.candidates
+    near, footprint, safe_poses, margin, turning = win.near, sit.footprint, win.safe_poses, win.margin, sit.turning
     turns = (safe | maybe) & (v == 0.0) & (w != 0.0)
     if v[best] == 0.0 and w[best] == 0.0 and turns.any() and (v > 0).any():
         # Standing still beats every way forward: turn in place rather than stand facing the obstacle,
@@ -349,11 +326,13 @@ def plan(scan, laser_pose, footprint, v0, w0, goal_xy, settings, remembered=None
                 safe[i] = candidates[i, 3] = True
                 best = int(i)
                 break
-    followed = None
-    if follow and v[best] == 0.0 and way is not None and now >= s.safety_margin:
-        # The window would stand or turn in place, yet a way is there: follow it, heading first (a narrow gap
-        # scores low on room for every arc through it, however the way leads there).
-        followed = _pursue(aim_xy, near, footprint, v0, w0, s, safe_steps, turning)
+    return best
+
+
+def _command(sit, s, win, best, free, heading, followed, aim_xy, way):
+    """The :class:`Plan`: one period's step toward the choice (or the way followed), what it is and why."""
+    v, w, safe, along, arcs, candidates = win.v, win.w, win.safe, win.along, win.arcs, win.candidates
+    v0, w0, previous, goal_distance = sit.v0, sit.w0, sit.previous, math.hypot(*sit.goal_xy)
     # What is sent is one period's step toward the target (step_toward).
     period_s = 1.0 / s.rate_hz
     prev_v, prev_w = (None, None) if previous is None else previous

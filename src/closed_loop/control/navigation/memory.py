@@ -16,9 +16,9 @@ CELL_M = 0.1
 SEE_THROUGH_M = 0.15
 #: A move turning in place (the window's, the recovery's, the escape's) keeps this much more than the margin
 #: from a point remembered where the scan cannot see: what was seen of an obstacle is the side that faced the
-#: laser, and a back corner swinging round meets a side never seen (a BARN post's lay 5 cm nearer a Jackal's
-#: corner than any point remembered of it); and a skid-steer base turning in place slides a few centimetres
-#: its odometry does not see.
+#: laser, and a back corner swinging round meets a side never seen (a post's far side can lie centimetres
+#: nearer the corner than any point remembered of it); and a skid-steer base turning in place slides a few
+#: centimetres its odometry does not see.
 BLIND_EXTRA_M = 0.05
 
 

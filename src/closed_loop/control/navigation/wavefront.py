@@ -1,6 +1,6 @@
 """Which way around: a navigation function over the newest scan, for the local planner's aim.
 
-The dynamic window (``closed_loop.control.local_planner``) judges commands over a couple of seconds; alone, it
+The dynamic window (``closed_loop.control.navigation.window``) judges commands over a couple of seconds; alone, it
 steers toward the goal's bearing and can wander into a pocket that the goal's direction leads into. So the
 aim it scores toward is not the goal itself but a point about ``aim_m`` along the shortest way to the goal
 through the free space the scan shows (Brock and Khatib's global dynamic window, 1999, with the scan as
@@ -232,7 +232,7 @@ def prepare():
 def _kernel():
     """The compiled wave (``wave_kernel``), imported with the first way asked for: numba costs a process about
     0.1 s and 60 MB, which a sweep's own process (that imports the controllers) need not pay."""
-    return importlib.import_module('closed_loop.control.wave_kernel')
+    return importlib.import_module('closed_loop.control.navigation.wave_kernel')
 
 
 def _nearest_passable(passable, cell):

@@ -1,5 +1,5 @@
 """The clearance of a footprint rectangle to scan points, fast and never overstated, for the local planner
-(``closed_loop.control.local_planner``): a distance transform of the points on a local grid (OpenCV), read at
+(``closed_loop.control.navigation.window``): a distance transform of the points on a local grid (OpenCV), read at
 samples along the footprint's outline, with a measured bound on how far a reading can fall below the
 truth, and the exact check for the candidates that bound leaves in doubt. Free of ROS.
 """
