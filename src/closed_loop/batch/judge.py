@@ -29,6 +29,9 @@ from closed_loop.recording import TOPIC_NAME
 from closed_loop.settings import SettingsError, param
 
 OUTCOMES = ('reached', 'stopped', 'failed', 'timed_out', 'collided', 'error')
+#: The BARN benchmark's clock (its harness, since February 2024): from when the robot is this far (m) from where
+#: it started, until it is within this distance (m) of the goal.
+BENCHMARK_START_M, BENCHMARK_GOAL_M = 0.1, 1.0
 REACHED, FAILED = 'REACHED', 'FAILED'
 
 
@@ -86,7 +89,8 @@ class Verdict:
     in the world frame; ``goal_error_m``: its distance to the goal (None without one); ``commands``: how many
     commands the base was given; ``missed_ticks``: a lockstepped graph's instants at which a node stayed busy
     past the simulator's wait and the scenario went on without it (0 in process, and for a graph that missed
-    none); ``why``: one line."""
+    none); ``why``: one line; ``benchmark_time_s``: the BARN benchmark's time (BENCHMARK_START_M from the start
+    to within BENCHMARK_GOAL_M of the goal), None where it never came so near the goal."""
     outcome: str
     mode: Optional[str] = None
     time_s: float = 0.0
@@ -99,6 +103,7 @@ class Verdict:
     commands: int = 0
     why: str = ''
     missed_ticks: int = 0
+    benchmark_time_s: Optional[float] = None
 
     def to_dict(self):
         """Plain values (JSON: an infinite clearance is null)."""
@@ -158,6 +163,8 @@ class Judge:
         self._rest_pose = None       # (x, y) where it came to rest, while it is at rest
         self._rest_end = False       # ended by resting (not by time or contact)
         self._at_rest = None         # (clearance, path, track length) when it came to rest
+        self._first_xy = None        # where it was first observed
+        self._moved_s = self._near_goal_s = None     # the benchmark's clock: started, stopped
 
     def due_from(self):
         """The simulated time (s) from which :meth:`due` is true (inf once the scenario is over)."""
@@ -204,6 +211,12 @@ class Judge:
                 self.peak_decel = max(self.peak_decel, (abs(speed0) - abs(speed)) / (t_s - t0))
         self._last = (t_s, x, y, speed)
         self._pose = (x, y, yaw)
+        self._first_xy = self._first_xy or (x, y)
+        if self._moved_s is None and math.hypot(x - self._first_xy[0], y - self._first_xy[1]) >= BENCHMARK_START_M:
+            self._moved_s = t_s
+        error = self.goal_error(x, y)
+        if self._near_goal_s is None and error is not None and error <= BENCHMARK_GOAL_M and not self.ended:
+            self._near_goal_s = t_s
         if self.track is not None:
             v, w = command if command is not None else (0.0, 0.0)
             self.track.append((t_s, x, y, yaw, speed, v, w, mode, self._clearance_now))
@@ -216,7 +229,6 @@ class Judge:
             # did while it was held at rest (a creep of millimetres) is not part of it.
             self._at_rest = (self.clearance, self.path_m, len(self.track) if self.track is not None else 0)
         self._rest_since = (self._rest_since if self._rest_since is not None else t_s) if at_rest else None
-        error = self.goal_error(x, y)
         near_goal = error is not None and error <= s.success_radius
         if self.ended:
             return True
@@ -262,8 +274,11 @@ class Judge:
         else:
             outcome = 'timed_out'
         time_s = self.ended_s if self.ended_s is not None else t_s
+        near = self._near_goal_s
+        benchmark = None if near is None or near > time_s + 1e-9 else near - (self._moved_s or 0.0)
         return Verdict(outcome, self.mode, time_s, self.contacts, self.clearance, tuple(pose), error,
-                       self.path_m, self.peak_decel, self.commands, self.describe(outcome, time_s, pose, error))
+                       self.path_m, self.peak_decel, self.commands, self.describe(outcome, time_s, pose, error),
+                       benchmark_time_s=benchmark)
 
     def track_dict(self):
         """The track and the contact log as plain values (JSON: a clearance beyond the lookout is null)."""

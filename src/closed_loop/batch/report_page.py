@@ -1,15 +1,17 @@
 """A sweep's page, ``report.html``: one self-contained file beside ``rows.csv`` that works from the folder,
 offline (no script, style or font from anywhere else; the pictures are files beside it), on a phone as on a
 wide screen. It shows, top to bottom: what was found (a recommendation and its rule, where the command made
-one), the headline (episodes, outcomes, success, contacts, time), what did not go as meant (a table of it, then
-each drawn episode's picture with its result and spec), the summary table (sortable: click a column's heading;
-folded when it is long), the plot, and the sweep file. Free of ROS.
+one), the headline (episodes, outcomes, success, contacts, time, and the BARN benchmark's score in worlds of its
+method), what did not go as meant (a table of it, then each drawn episode's picture with its result and spec),
+the summary table (sortable: click a column's heading; folded when it is long), the plot, and the sweep file.
+Free of ROS.
 """
 import html
 import json
 import os
 
 from closed_loop.batch.pictures import is_failure
+from closed_loop.sim import barn_score
 
 #: The failing episodes the page lists, at most (the rest are in rows.csv).
 MAX_LISTED = 1000
@@ -103,6 +105,10 @@ def _outcomes(rows):
         100.0 * (len(rows) - failing) / len(rows) if rows else 0.0, ' class="bad"' if contacts else '', contacts)
     if times:
         headline += '<span>time: mean %.1f s, longest %.1f s</span>' % (sum(times) / len(times), max(times))
+    scores = [float(r['benchmark_score']) for r in rows if _number(r.get('benchmark_score'))]
+    if scores:
+        headline += ('<span>the BARN benchmark\'s score: mean %.3f over %d episodes (at most %.1f)</span>'
+                     % (sum(scores) / len(scores), len(scores), barn_score.BEST))
     return '<p class="outcomes"><span>%d episodes</span>%s<span class="bad">not as meant: %d</span>%s</p>' % (
         len(rows), spans, failing, headline)
 

@@ -8,7 +8,7 @@ import os
 import re
 from typing import Optional
 
-from closed_loop.sim import generators
+from closed_loop.sim import barn_score, generators
 from closed_loop.controllers import ControllerError, controller_class, controller_classes
 from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
 from closed_loop.batch.judge import JudgeSettings, Verdict
@@ -252,6 +252,17 @@ def result_from_verdict(verdict, **extra):
     """An :class:`EpisodeResult` with the :class:`closed_loop.batch.judge.Verdict`'s fields."""
     fields = {f.name: getattr(verdict, f.name) for f in dataclasses.fields(Verdict)}
     return EpisodeResult(**dict(fields, **extra))
+
+
+def benchmark_score(spec, result):
+    """The BARN benchmark's score of the episode ``spec`` that gave ``result`` (``closed_loop.sim.barn_score``),
+    in a world of the benchmark's method (``{'generator': {'method': 'barn', ...}}``); None in any other."""
+    world = spec.world
+    generator = world.get('generator') if isinstance(world, dict) else None
+    if not isinstance(generator, dict) or generator.get('method') != 'barn':
+        return None
+    optimal = barn_score.optimal_s(generators.settings_from(generator, spec.robot))
+    return barn_score.score(result.contacts, result.benchmark_time_s, optimal)
 
 
 def parse_controller(value, node_names):

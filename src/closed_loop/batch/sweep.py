@@ -31,9 +31,11 @@ from closed_loop import cli, launcher
 from closed_loop.batch import graph_keeper, pictures, rows_file, sweep_file, sweep_report
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
+from closed_loop.batch.spec import benchmark_score
 
 RESULT_COLUMNS = ('outcome', 'mode', 'time_s', 'contacts', 'min_clearance_m', 'final_x', 'final_y', 'final_yaw',
-                  'goal_error_m', 'path_m', 'peak_decel_mps2', 'missed_ticks', 'wall_s', 'error', 'why', 'logs')
+                  'goal_error_m', 'path_m', 'peak_decel_mps2', 'missed_ticks', 'benchmark_time_s', 'benchmark_score',
+                  'wall_s', 'error', 'why', 'logs')
 _CACHE = {}     # per worker process: worlds and profiles loaded once
 #: Episodes handed to the cluster ahead of the results: this many per worker thread (at least WINDOW_MIN), the
 #: next one as each finishes, so that neither this process nor the scheduler holds a task per episode of a
@@ -60,9 +62,10 @@ def run_row(spec_fields, logs=None, choice='none'):
         row = {'outcome': r.outcome, 'mode': r.mode, 'time_s': r.time_s, 'contacts': r.contacts,
                'min_clearance_m': r.min_clearance_m, 'final_x': r.final_pose[0], 'final_y': r.final_pose[1],
                'final_yaw': r.final_pose[2], 'goal_error_m': r.goal_error_m, 'path_m': r.path_m,
-               'peak_decel_mps2': r.peak_decel_mps2, 'missed_ticks': r.missed_ticks, 'wall_s': r.wall_s,
-               'error': r.error or '', 'why': r.why,
-               'logs': r.logs or ''}
+               'peak_decel_mps2': r.peak_decel_mps2, 'missed_ticks': r.missed_ticks,
+               'benchmark_time_s': _blank(r.benchmark_time_s), 'benchmark_score': _blank(benchmark_score(spec, r)),
+               'wall_s': r.wall_s, 'error': r.error or '',
+               'why': r.why, 'logs': r.logs or ''}
         if spec.keep_trajectory:
             row['trajectory'] = r.trajectory
         if pictures.wanted(choice, r.outcome, r.contacts):
@@ -292,6 +295,11 @@ def _digest_text(text):
 
 def _cell(value):
     return json.dumps(value) if isinstance(value, (dict, list, tuple)) else value
+
+
+def _blank(value):
+    """A cell for what may not be there: '' for None."""
+    return '' if value is None else value
 
 
 def checking(done, total, stream=sys.stderr):
