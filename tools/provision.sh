@@ -80,10 +80,11 @@ if [ ! -f "$ws/devel/setup.bash" ] || [ "$(cat "$build_stamp" 2>/dev/null)" != "
   echo "$want" > "$build_stamp"
 fi
 
-# The compiled loops (numba: the LIDAR's planar caster, the navigator's wave and arcs), compiled into the source tree's
-# __pycache__ once here, not by the first processes of a test run, all at once. Loading them when they are
-# there takes a fraction of a second.
-PYTHONPATH="$root/src" "$venv/bin/python3" -c 'from closed_loop.control import local_planner
-from closed_loop.sim.planar_rays import PlanarRays
-local_planner.prepare()
-PlanarRays([])'
+# The compiled loops (numba: the LIDAR's planar caster and its grid, the navigator's wave and arcs, a mesh's
+# footprint), compiled into the source tree's __pycache__ once here, not by the first processes of a test run,
+# all at once. Loading them when they are there takes a fraction of a second.
+PYTHONPATH="$root/src" "$venv/bin/python3" -c 'from closed_loop.control.navigation import window
+from closed_loop.sim import mesh_footprint, planar_rays
+window.prepare()
+planar_rays.prepare()
+mesh_footprint.prepare()'

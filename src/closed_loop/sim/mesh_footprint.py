@@ -98,6 +98,11 @@ def footprint_boxes(triangles, transform, name, fail):
     return boxes
 
 
+def prepare():
+    """The compiled rasteriser loaded (compiled on a machine's first use): the footprint of a small box."""
+    footprint_boxes(box_triangles((0.2, 0.2, 0.5)), numpy.eye(4), 'box', lambda what, got: None)
+
+
 def _section_heights(heights, low, top):
     """Where the mesh is cut across to find its inside: between each two heights of its vertices (``heights``,
     within ``low`` to ``top``), where its cross-section is the same all the way; at most

@@ -38,6 +38,14 @@ GRID_CELL_SCALE, GRID_MAX_CELLS = 1.0, 1 << 22
 GRID_MARGIN_M = 1e-6
 
 
+def prepare():
+    """The compiled loop loaded, both ways of matching rays to obstacles (compiled on a machine's first use)."""
+    from closed_loop.sim.world import Obstacle
+    post = Obstacle('post', 'cylinder', (1.0, 0.0, 0.5), 0.0, (0.2, 0.2, 1.0), 0.1, (1.0, 1.0, 1.0, 1.0), None)
+    PlanarRays([post])
+    PlanarRays([post], grid=True)
+
+
 class PlanarRays:
     """Casts horizontal rays at the obstacles ``obstacles`` (``world.Obstacle``, vertical prisms); ``grid``: walk
     a grid of cells when the obstacles stand still (None: when there are at least
