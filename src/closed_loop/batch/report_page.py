@@ -80,13 +80,15 @@ class _Why(str):
     """A table cell of prose (a verdict's line), given room to wrap."""
 
 
-def _e(value):
+def esc(value):
+    """``value`` as HTML text."""
     return html.escape(str(value), quote=True)
 
 
-def _table(header, body, css_id):
-    head = ''.join('<th scope="col"><button type="button">%s</button></th>' % _e(h) for h in header)
-    rows = ''.join('<tr>%s</tr>' % ''.join('<td class="why">%s</td>' % _e(cell) if isinstance(cell, _Why)
+def table(header, body, css_id):
+    """A sortable table: ``header`` (names), ``body`` (rows of HTML cells; a :class:`_Why` cell is escaped prose)."""
+    head = ''.join('<th scope="col"><button type="button">%s</button></th>' % esc(h) for h in header)
+    rows = ''.join('<tr>%s</tr>' % ''.join('<td class="why">%s</td>' % esc(cell) if isinstance(cell, _Why)
                                            else '<td>%s</td>' % cell for cell in row) for row in body)
     return ('<div class="scroll"><table class="sortable" id="%s"><thead><tr>%s</tr></thead><tbody>%s</tbody>'
             '</table></div>' % (css_id, head, rows))
@@ -98,7 +100,7 @@ def _outcomes(rows):
         counts[row['outcome']] = counts.get(row['outcome'], 0) + 1
     failing = sum(is_failure(r['outcome'], r.get('contacts')) for r in rows)
     spans = ''.join('<span%s>%s: %d</span>' % (' class="bad"' if outcome in ('collided', 'failed', 'timed_out', 'error')
-                                               else '', _e(outcome), n) for outcome, n in sorted(counts.items()))
+                                               else '', esc(outcome), n) for outcome, n in sorted(counts.items()))
     contacts = sum(int(r.get('contacts') or 0) for r in rows if str(r.get('contacts') or '0').isdigit())
     times = [float(r['time_s']) for r in rows if _number(r.get('time_s'))]
     headline = '<span>as meant: %.1f%%</span><span%s>contacts: %d</span>' % (
@@ -121,7 +123,7 @@ def _number(text):
 
 
 def _result(row):
-    cells = ''.join('<tr><th scope="row">%s</th><td>%s</td></tr>' % (_e(k), _e(row.get(k, '')))
+    cells = ''.join('<tr><th scope="row">%s</th><td>%s</td></tr>' % (esc(k), esc(row.get(k, '')))
                     for k in RESULT_FIELDS if row.get(k, '') != '')
     return '<div class="scroll"><table>%s</table></div>' % cells
 
@@ -140,10 +142,10 @@ def write(path, sweep, rows, header, body, plot_file, picture_of, preface=()):
     folder = os.path.dirname(os.path.abspath(path))
     parts = ['<!DOCTYPE html>', '<html lang="en"><head><meta charset="utf-8">',
              '<meta name="viewport" content="width=device-width, initial-scale=1">',
-             '<title>sweep %s</title><style>%s</style></head><body>' % (_e(sweep.name), STYLE),
-             '<h1>sweep <code>%s</code></h1>' % _e(sweep.name)]
+             '<title>sweep %s</title><style>%s</style></head><body>' % (esc(sweep.name), STYLE),
+             '<h1>sweep <code>%s</code></h1>' % esc(sweep.name)]
     if preface:
-        parts.append('<section class="preface" id="preface">%s</section>' % ''.join('<p>%s</p>' % _e(line) for line in preface))
+        parts.append('<section class="preface" id="preface">%s</section>' % ''.join('<p>%s</p>' % esc(line) for line in preface))
     parts.append(_outcomes(rows))
     failing = sorted((r for r in rows if is_failure(r['outcome'], r.get('contacts'))), key=lambda r: int(r['index']))
     drawn = [r for r in (failing if sweep.report['pictures'] != 'all' else rows) if os.path.exists(picture_of(r['index']))]
@@ -151,33 +153,33 @@ def write(path, sweep, rows, header, body, plot_file, picture_of, preface=()):
     if failing:
         listed = failing[:MAX_LISTED]
         keys = list(sweep.keys)
-        body_rows = [['<a href="#episode-%s">%s</a>' % (_e(r['index']), _e(r['index']))
-                      if r['index'] in drawn_ids else _e(r['index']), _e(r['outcome']), _e(r.get('contacts', ''))]
-                     + [_e(r.get(k, '')) for k in keys] + [_Why(r.get('why') or r.get('error', ''))] for r in listed]
+        body_rows = [['<a href="#episode-%s">%s</a>' % (esc(r['index']), esc(r['index']))
+                      if r['index'] in drawn_ids else esc(r['index']), esc(r['outcome']), esc(r.get('contacts', ''))]
+                     + [esc(r.get(k, '')) for k in keys] + [_Why(r.get('why') or r.get('error', ''))] for r in listed]
         parts.append('<h2>Not as meant (%d)</h2>' % len(failing))
-        parts.append(_table(['index', 'outcome', 'contacts'] + keys + ['why'], body_rows, 'failing'))
+        parts.append(table(['index', 'outcome', 'contacts'] + keys + ['why'], body_rows, 'failing'))
         if len(failing) > len(listed):
             parts.append('<p class="muted">The first %d are listed; rows.csv has them all.</p>' % len(listed))
     parts.append('<h2>Pictures (%d)</h2>' % len(drawn))
     parts.append('<p class="muted">Any episode again, as a picture or a bag to replay in rviz: <code>rosrun closed_loop '
                  'episode_plot %s INDEX</code>, <code>rosrun closed_loop episode_bag %s INDEX</code>.</p>'
-                 % (_e(folder), _e(folder)))
+                 % (esc(folder), esc(folder)))
     for r in drawn:
         parts.append('<figure id="episode-%s"><a href="%s"><img src="%s" alt="episode %s: %s" decoding="async"></a><figcaption>'
                      '<strong>episode %s</strong>: %s%s<details><summary>spec</summary><pre>%s</pre></details>'
                      '</figcaption></figure>' % (
-                         _e(r['index']), _e(os.path.relpath(picture_of(r['index']), folder)),
-                         _e(os.path.relpath(picture_of(r['index']), folder)), _e(r['index']),
-                         _e(r['outcome']), _e(r['index']), _e(r.get('why') or r.get('error', '')), _result(r),
-                         _e(_spec(r))))
-    summary = _table(header, [[_e(c) for c in line] for line in body], 'summary')
+                         esc(r['index']), esc(os.path.relpath(picture_of(r['index']), folder)),
+                         esc(os.path.relpath(picture_of(r['index']), folder)), esc(r['index']),
+                         esc(r['outcome']), esc(r['index']), esc(r.get('why') or r.get('error', '')), _result(r),
+                         esc(_spec(r))))
+    summary = table(header, [[esc(c) for c in line] for line in body], 'summary')
     if len(body) > FOLD_ROWS:
         summary = '<details><summary>%d rows (open)</summary>%s</details>' % (len(body), summary)
     parts.append('<h2>Summary</h2>' + summary)
     if plot_file and os.path.exists(plot_file):
         parts.append('<h2>Plot</h2><img src="%s" alt="contact rate and least clearance against the grid" '
-                     'width="700" height="650">' % _e(os.path.relpath(plot_file, folder)))
-    parts.append('<h2>The sweep</h2><pre>%s</pre>' % _e(getattr(sweep, 'text', '') or ''))
+                     'width="700" height="650">' % esc(os.path.relpath(plot_file, folder)))
+    parts.append('<h2>The sweep</h2><pre>%s</pre>' % esc(getattr(sweep, 'text', '') or ''))
     parts.append('<script>%s</script></body></html>' % SCRIPT)
     tmp = path + '.tmp'
     with open(tmp, 'w', encoding='utf-8') as f:

@@ -291,10 +291,11 @@ def resolve(name_or_path):
                      % (quote(name_or_path), ', '.join(shipped()) or 'none found'))
 
 
-def load(path, progress=None):
+def load(path, progress=None, changes=None, suffix=''):
     """The :class:`Sweep` of the file at ``path``, or of the shipped sweep of that name (:func:`resolve`): at most
     MAX_FILE_BYTES of UTF-8 YAML, no key twice in a mapping. A file that is not a sweep file is refused without
-    quoting it."""
+    quoting it. ``changes``: {key: value} put into its base as a grid's keys are (``closed_loop.batch.compare``'s
+    two sides), each key checked as a grid key; ``suffix``: added to its name."""
     path = resolve(path)
     try:
         text = read_text(path, MAX_FILE_BYTES, what='sweep file')
@@ -302,5 +303,11 @@ def load(path, progress=None):
         Checker(path).mapping(data, '(top level)', TOP_KEYS)
     except FileError as error:
         raise SweepError(str(error)) from None
-    return build(data.get('name'), data.get('base', {}), data.get('grid'), data.get('plot'), path,
-                 data.get('report'), text, progress)
+    base = data.get('base', {})
+    if changes:
+        for key in changes:
+            _check_key(path, key)
+        base = apply(base if isinstance(base, dict) else {}, changes)
+    name = data.get('name')
+    return build(name + suffix if isinstance(name, str) and suffix else name, base, data.get('grid'),
+                 data.get('plot'), path, data.get('report'), text, progress)

@@ -1,0 +1,49 @@
+"""compare: one scenario set for two sides on a local Dask cluster, the episodes paired. A deliberately worse
+stop_on_obstacle (it neither slows nor stops before 5 cm) against the shipped one: every pair a regression,
+exit 1, the page with the pairs and A beside B, and with the gate raised, exit 0; a bad change: refused. (A side
+against itself, no regression: test/unit/test_compare_pairs.py.)"""
+import os
+
+from closed_loop.batch import compare
+
+SET = """name: stopping
+base: {world: wall, controller: stop_on_obstacle, time_limit_s: 15}
+grid:
+  settings.cruise_speed: [0.3, 0.6, 1.0]
+report: {pictures: failures}
+"""
+WORSE = ['settings.stop_distance=0.05', 'settings.slow_distance=0.06']
+
+
+def test_a_worse_controller_regresses_every_pair_and_fails_the_gate(tmp_path, capsys):
+    spec = tmp_path / 'stopping.yaml'
+    spec.write_text(SET)
+    out = tmp_path / 'out'
+    args = [str(spec), '--output', str(out), '--workers', '1']
+    assert compare.main(args + sum((['--b', change] for change in WORSE), [])) == 1
+    said = capsys.readouterr().out
+    assert '3 pairs: 3 regressions (A as meant, B not), 0 fixes' in said, said
+    assert "McNemar's exact test: p = 0.25" in said and 'B regressed: 3 regressions, more than --max-regressions 0' in said
+    page = (out / 'compare.html').read_text()
+    assert page.index('Pairs that differ (3)') < page.index('Every pair')
+    assert page.count('class="pair"') == 3
+    for index in range(3):                  # A's picture drawn again, B's from its sweep
+        assert (out / 'pairs' / ('episode-%05d-a.png' % index)).stat().st_size > 10000
+        assert (out / 'b' / 'pictures' / ('episode-%05d.png' % index)).exists()
+    assert (out / 'a' / 'report.html').exists() and (out / 'b' / 'rows.csv').exists()
+    # The gate is the user's: three regressions allowed, it holds.
+    assert compare.main(args + ['--resume', '--max-regressions', '3'] + sum((['--b', c] for c in WORSE), [])) == 0
+
+
+BAD = {'settings': "--b settings: expected KEY=VALUE", 'colour=red': 'grid.colour: expected an episode field',
+       'sim.start=[1, 2': '--b sim.start=[1, 2: the value is not YAML'}
+
+
+def test_a_bad_change_is_refused_in_one_line_before_either_side_runs(tmp_path, capsys):
+    spec = tmp_path / 'stopping.yaml'
+    spec.write_text(SET)
+    for change, message in BAD.items():
+        assert compare.main([str(spec), '--output', str(tmp_path / 'out'), '--b', change]) == 2, change
+        err = capsys.readouterr().err
+        assert message in err and err.count('\n') == 1, err
+    assert not os.path.exists(tmp_path / 'out')
