@@ -35,7 +35,7 @@ def test_a_worse_controller_regresses_every_pair_and_fails_the_gate(tmp_path, ca
     assert compare.main(args + ['--resume', '--max-regressions', '3'] + sum((['--b', c] for c in WORSE), [])) == 0
 
 
-BAD = {'settings': "--b settings: expected KEY=VALUE", 'colour=red': 'grid.colour: expected an episode field',
+BAD = {'settings': "--b settings: expected KEY=VALUE", 'colour=red': '--b colour: expected an episode field',
        'sim.start=[1, 2': '--b sim.start=[1, 2: the value is not YAML'}
 
 

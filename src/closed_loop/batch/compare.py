@@ -160,8 +160,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     try:
         changes = {side: parse_changes(getattr(args, side), side) for side in ('a', 'b')}
-        # Both sides checked before either runs.
-        name = [sweep_file.load(args.spec, changes=changes[side]).name for side in ('a', 'b')][0]
+        for side in ('a', 'b'):             # both sides checked before either runs
+            sweep_file.load(args.spec, changes=changes[side], suffix='-' + side)
+        name = sweep_file.load(args.spec).name
     except sweep_file.SweepError as error:
         print('compare: %s' % error, file=sys.stderr)
         return 2

@@ -162,7 +162,8 @@ def _spec(base, assignment, source, cache=None):
     return spec
 
 
-def _check_key(source, key):
+def _check_key(source, key, field=None):
+    """A grid's key (or another place's, named ``field``) checked: what it can change of an episode."""
     head, _, rest = key.partition('.')
     if head in ('settings', 'sim', 'args') and rest and '.' not in rest:
         return
@@ -170,9 +171,9 @@ def _check_key(source, key):
         return
     if key in SPEC_FIELDS and key not in ('settings', 'sim'):
         return
-    raise SweepError('%s: grid.%s: expected an episode field (%s), settings.NAME, sim.NAME, args.NAME (a graph '
+    raise SweepError('%s: %s: expected an episode field (%s), settings.NAME, sim.NAME, args.NAME (a graph '
                      "controller's launch arg) or world.generator.NAME"
-                     % (source, key, ', '.join(f for f in SPEC_FIELDS if f not in ('settings', 'sim'))))
+                     % (source, field or 'grid.' + key, ', '.join(f for f in SPEC_FIELDS if f not in ('settings', 'sim'))))
 
 
 def apply(base, assignment):
@@ -306,7 +307,7 @@ def load(path, progress=None, changes=None, suffix=''):
     base = data.get('base', {})
     if changes:
         for key in changes:
-            _check_key(path, key)
+            _check_key(path, key, '%s%s' % (suffix.lstrip('-') and '--%s ' % suffix.lstrip('-'), key))
         base = apply(base if isinstance(base, dict) else {}, changes)
     name = data.get('name')
     return build(name + suffix if isinstance(name, str) and suffix else name, base, data.get('grid'),
