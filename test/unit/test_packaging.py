@@ -135,7 +135,7 @@ MODULES = {
     'matplotlib': ('pip:matplotlib', 'python3-matplotlib'), 'xacro': ('pip:xacro', 'xacro'),
     'dask': ('pip:dask', None), 'distributed': ('pip:distributed', None),
     'trimesh': ('pip:trimesh', 'python3-trimesh-pip'), 'collada': ('pip:pycollada', 'python3-collada'),
-    'scipy': ('pip:scipy', 'python3-scipy'),
+    'scipy': ('pip:scipy', 'python3-scipy'), 'optuna': ('pip:optuna', None),
 }
 
 

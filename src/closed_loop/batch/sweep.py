@@ -76,16 +76,18 @@ def run_row(spec_fields, logs=None, choice='none'):
 
 
 class Progress:
-    """A progress line on stderr: counts, errors, elapsed and an estimated finish."""
+    """A progress line on stderr: counts, errors (``what`` failing, for a search), elapsed and an estimated
+    finish."""
 
-    def __init__(self, total, done=0, stream=sys.stderr):
+    def __init__(self, total, done=0, stream=sys.stderr, label='sweep', what='error'):
         self.total, self.done, self.errors, self.stream = total, done, 0, stream
+        self.label, self.what = label, what
         self.started, self.first, self.shown = time.monotonic(), done, 0.0
         self.tty = hasattr(stream, 'isatty') and stream.isatty()
 
     def update(self, outcome):
         self.done += 1
-        self.errors += outcome == 'error'
+        self.errors += outcome == self.what
         now = time.monotonic()
         if self.tty and now - self.shown < 0.2 and self.done < self.total:
             return
@@ -97,9 +99,10 @@ class Progress:
         left = (self.total - self.done) / rate if rate > 0 else math.inf
         width = 30
         filled = int(width * self.done / max(self.total, 1))
-        line = 'sweep %d/%d [%s%s] %3.0f%%  %d errors  %s elapsed, %s left' % (
-            self.done, self.total, '#' * filled, '-' * (width - filled), 100.0 * self.done / max(self.total, 1),
-            self.errors, _clock(elapsed), _clock(left) if math.isfinite(left) else '?')
+        line = '%s %d/%d [%s%s] %3.0f%%  %d %ss  %s elapsed, %s left' % (
+            self.label, self.done, self.total, '#' * filled, '-' * (width - filled),
+            100.0 * self.done / max(self.total, 1), self.errors, self.what, _clock(elapsed),
+            _clock(left) if math.isfinite(left) else '?')
         self.stream.write(('\r' + line) if self.tty else line + '\n')
         if self.tty and self.done >= self.total:
             self.stream.write('\n')
@@ -120,7 +123,7 @@ def read_rows(path):
         return list(csv.DictReader(f))
 
 
-def _client(scheduler, workers):
+def client_for(scheduler, workers):
     if not quiet.verbose():
         # Dask's own warnings (a worker "still alive after 4.0 seconds, killing" after Ctrl-C) are not the
         # sweep's: only its errors are shown, here and (local_worker) in the local workers, as pybullet's output
@@ -145,7 +148,7 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
     full for the next row raises ``rows_file.NoRoom`` (every row before it whole)."""
     os.makedirs(output, exist_ok=True)
     rows_path = os.path.join(output, 'rows.csv')
-    if not resume and _has_rows(rows_path):
+    if not resume and has_rows(rows_path):
         raise sweep_file.SweepError('%s: already holds a sweep\'s rows: --resume to go on with it, or choose '
                                     'another --output' % rows_path)
     columns = ['index', 'spec'] + list(sweep.keys) + list(RESULT_COLUMNS)
@@ -165,7 +168,7 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
     todo = ((i, a, s) for i, (a, s) in enumerate(sweep.specs) if row_key(s) not in done)
     total = len(sweep.specs)
     left = max(0, total - len(done))
-    writing = _Writing(output, rows, traj, columns, left, sweep.report)
+    writing = Writing(output, rows, traj, columns, left, sweep.report)
     try:
         if left:
             _run_todo(todo, writing, Progress(total, total - left, stream), scheduler, workers)
@@ -175,7 +178,7 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
     return read_rows(rows_path)
 
 
-def _has_rows(path):
+def has_rows(path):
     """Whether the rows file at ``path`` holds anything past its header line."""
     try:
         with open(path, 'rb') as f:
@@ -185,7 +188,7 @@ def _has_rows(path):
         return False
 
 
-class _Writing:
+class Writing:
     """Where a sweep's results go: each row whole to rows.csv, its picture and trajectory beside it; a full
     disk becomes ``rows_file.NoRoom`` with the room the rest needs."""
 
@@ -239,7 +242,7 @@ def _run_todo(todo, writing, progress, scheduler, workers):
     """Run the episodes ``todo`` ((index, assignment, spec) each) on the cluster, handing it WINDOW_PER_THREAD
     per worker thread ahead, and write each result as it comes."""
     import distributed
-    client, cluster = _client(scheduler, workers)
+    client, cluster = client_for(scheduler, workers)
     logs_root = os.path.abspath(os.path.join(writing.output, 'graphs'))
     window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
     pending = iter(todo)

@@ -141,16 +141,16 @@ class Grid:
             index, i = divmod(index, len(values))
             assignment[key] = values[i]
         assignment = {key: assignment[key] for key, _ in self.axes}
-        return assignment, _spec(self.base, assignment, self.source)
+        return assignment, episode_spec(self.base, assignment, self.source)
 
     def __iter__(self):
         return (self[i] for i in range(self.count))
 
 
-def _spec(base, assignment, source, cache=None):
+def episode_spec(base, assignment, source, cache=None, part='grid'):
     """The EpisodeSpec of ``assignment`` over ``base``; with ``cache``, also prepared (every check an episode
-    makes before it runs). A problem is a SweepError naming the combination."""
-    where = '%s: grid (%s)' % (source, ', '.join('%s=%s' % (k, quote(v, 60)) for k, v in assignment.items()))
+    makes before it runs). A problem is a SweepError naming the combination (of the file's ``part``)."""
+    where = '%s: %s (%s)' % (source, part, ', '.join('%s=%s' % (k, quote(v, 60)) for k, v in assignment.items()))
     try:
         spec = EpisodeSpec.from_dict(apply(base, assignment), where)
         if cache is not None:
@@ -162,7 +162,7 @@ def _spec(base, assignment, source, cache=None):
     return spec
 
 
-def _check_key(source, key, field=None):
+def check_key(source, key, field=None):
     """A grid's key (or another place's, named ``field``) checked: what it can change of an episode."""
     head, _, rest = key.partition('.')
     if head in ('settings', 'sim', 'args') and rest and '.' not in rest:
@@ -209,7 +209,7 @@ class Sweep:
         self.report, self.text = dict(REPORT_DEFAULTS, **(report or {})), text
 
 
-def _report(source, raw):
+def check_report(source, raw):
     if raw is None:
         return dict(REPORT_DEFAULTS)
     if not isinstance(raw, dict) or not set(raw) <= set(REPORT_DEFAULTS):
@@ -236,7 +236,7 @@ def build(name, base, grid, plot=None, source='<sweep>', report=None, text=None,
         raise SweepError('%s: grid: expected a mapping of keys to value lists, got %s' % (source, quote(grid)))
     axes = []
     for key, raw in grid.items():
-        _check_key(source, str(key))
+        check_key(source, str(key))
         axes.append((str(key), _values(source, key, raw)))
     grid_specs = Grid(base, axes, source)
     if len(grid_specs) > MAX_EPISODES:
@@ -252,7 +252,7 @@ def build(name, base, grid, plot=None, source='<sweep>', report=None, text=None,
     if text is None:
         text = yaml.safe_dump({'name': name, 'base': base, 'grid': grid, 'plot': plot, 'report': report},
                               sort_keys=False, default_flow_style=None)
-    return Sweep(name, [k for k, _ in axes], grid_specs, plot, _report(source, report), text)
+    return Sweep(name, [k for k, _ in axes], grid_specs, plot, check_report(source, report), text)
 
 
 def _check(grid, progress):
@@ -265,7 +265,7 @@ def _check(grid, progress):
     combinations = range(len(grid)) if len(grid) <= CHECK_ALL else ()
     total, told = len(trials) + len(combinations), time.monotonic()
     for done, assignment in enumerate(itertools.chain(trials, (grid[i][0] for i in combinations))):
-        _spec(grid.base, assignment, grid.source, cache)
+        episode_spec(grid.base, assignment, grid.source, cache)
         if progress is not None and time.monotonic() - told > PROGRESS_S:
             progress(done, total)
             told = time.monotonic()
@@ -307,7 +307,7 @@ def load(path, progress=None, changes=None, suffix=''):
     base = data.get('base', {})
     if changes:
         for key in changes:
-            _check_key(path, key, '%s%s' % (suffix.lstrip('-') and '--%s ' % suffix.lstrip('-'), key))
+            check_key(path, key, '%s%s' % (suffix.lstrip('-') and '--%s ' % suffix.lstrip('-'), key))
         base = apply(base if isinstance(base, dict) else {}, changes)
     name = data.get('name')
     return build(name + suffix if isinstance(name, str) and suffix else name, base, data.get('grid'),
