@@ -3,6 +3,7 @@ stop_on_obstacle (it neither slows nor stops before 5 cm) against the shipped on
 exit 1, the page with the pairs and A beside B, and with the gate raised, exit 0; a bad change: refused. (A side
 against itself, no regression: test/unit/test_compare_pairs.py.)"""
 import os
+import re
 
 from closed_loop.batch import compare
 
@@ -47,3 +48,21 @@ def test_a_bad_change_is_refused_in_one_line_before_either_side_runs(tmp_path, c
         err = capsys.readouterr().err
         assert message in err and err.count('\n') == 1, err
     assert not os.path.exists(tmp_path / 'out')
+
+
+def test_the_failures_a_search_found_are_a_set_to_compare_a_fix_on(tmp_path, capsys):
+    """compare on a search's folder: its failing episodes, each run as it was (A) and with a fix (B)."""
+    from closed_loop.batch import search
+    spec = tmp_path / 'search.yaml'
+    spec.write_text('name: hunt\nbase: {world: wall, controller: stop_on_obstacle, time_limit_s: 12, '
+                    'settings: {stop_distance: 0.2}}\nspace:\n  settings.cruise_speed: {from: 0.25, to: 1.0}\n'
+                    '  settings.slow_distance: {from: 0.21, to: 1.0}\nbudget: 12\nseed: 1\n'
+                    'failure: {outcomes: [collided]}\n')
+    assert search.main([str(spec), '--output', str(tmp_path / 'hunt'), '--workers', '2']) == 0
+    found = capsys.readouterr().out
+    failing = int(re.search(r'search hunt: 12 episodes, (\d+) failing', found).group(1))
+    assert failing > 0, found
+    assert compare.main([str(tmp_path / 'hunt'), '--output', str(tmp_path / 'out'), '--workers', '2',
+                         '--b', 'settings.stop_distance=0.5', '--b', 'settings.slow_distance=1.0']) == 0
+    said = capsys.readouterr().out
+    assert '%d pairs: 0 regressions (A as meant, B not), %d fixes' % (failing, failing) in said, said

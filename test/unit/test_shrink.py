@@ -1,5 +1,6 @@
-"""shrink (closed_loop.batch.shrink): delta debugging finds the one obstacle a failure needs among 300, the time
-limit and the settings shrink while it fails the same way, and the rostest, world and picture come out."""
+"""shrink (closed_loop.batch.shrink): delta debugging finds the one obstacle a failure needs among 300, the start
+moves nearer the failure, the time limit and the settings shrink while it fails the same way, and the rostest,
+world and picture come out."""
 import json
 import math
 import xml.etree.ElementTree as ET
@@ -52,13 +53,17 @@ def test_a_collision_among_300_obstacles_shrinks_to_the_one_it_needs(tmp_path, c
     world = yaml.safe_load((out / 'world.yaml').read_text())
     assert [o['name'] for o in world['obstacles']] == ['ahead']
     small = EpisodeSpec.from_dict(json.loads((out / 'episode.json').read_text()))
-    assert small.time_limit_s < 30.0 and small.settings['slow_distance'] == pytest.approx(0.23)
-    assert run_episode(small).outcome == 'collided'             # still fails the same way
+    assert small.time_limit_s <= 5.0 and small.settings['slow_distance'] == pytest.approx(0.23)
+    x, y, _ = (float(v) for v in small.sim['start'].split())    # it starts nearer the post, where it still hits it
+    assert 0.5 < x < 2.7 and abs(y) < 0.01
+    again = run_episode(small)
+    assert again.outcome == 'collided' and again.time_s < 3.0    # still fails the same way, sooner
     test = ET.parse(str(out / 'regression.test')).getroot()
     assert test.find('include').get('file') == '$(find closed_loop)/launch/scenario.launch'
     args = {a.get('name'): a.get('value') for a in test.find('include').findall('arg')}
     assert args['world'] == '$(dirname)/world.yaml' and args['controller_type'] == 'stop_on_obstacle'
     assert {p.get('name'): p.get('value') for p in test.findall('param')}['/controller/stop_distance'] == '0.2'
+    assert args['start'] == small.sim['start']
     assert (out / 'picture.png').stat().st_size > 10000
     assert 'shrink: 1 obstacles (of 300)' in capsys.readouterr().out
 

@@ -108,3 +108,17 @@ def test_a_yaml_alias_bomb_gives_a_short_line(tmp_path):
         sweep_file.load(write(tmp_path, BOMB))
     message = str(error.value)
     assert len(message) - len(str(tmp_path)) < 300 and '\n' not in message and 'seed' in message, message
+
+
+def test_the_start_and_the_goal_are_grid_keys_a_coordinate_each():
+    fields = sweep_file.apply({'world': 'wall'}, {'start.x': 1.0, 'start.y': -0.5, 'goal.x': 4.0, 'goal.y': 0.5})
+    assert fields['sim'] == {'start': '1.0 -0.5 0'} and fields['goal'] == [4.0, 0.5]
+    turned = sweep_file.apply({'world': 'wall', 'sim': {'start': '1 2 0.3'}}, {'start.yaw': 1.5})
+    assert turned['sim']['start'] == '1 2 1.5'                      # over the base's start
+    with pytest.raises(sweep_file.SweepError, match='start.x, start.y: expected both'):
+        sweep_file.apply({'world': 'wall'}, {'start.y': 1.0})
+    with pytest.raises(sweep_file.SweepError, match='goal.x, goal.y: expected both'):
+        sweep_file.apply({'world': 'wall'}, {'goal.x': 1.0})
+    sweep = sweep_file.build('poses', {'world': 'wall', 'controller': 'stop_on_obstacle'},
+                             {'start.x': [0.0, 0.5], 'start.y': [0.0]})
+    assert [s.sim['start'] for _, s in sweep.specs] == ['0.0 0.0 0', '0.5 0.0 0']

@@ -4,9 +4,11 @@
     rosrun closed_loop compare my_sweep.yaml --a controller='{launch: my_pkg/old.launch}' \\
                                              --b controller='{launch: my_pkg/new.launch}' --max-regressions 0
 
-The sweep file's grid is the scenario set; ``--a`` and ``--b`` each put ``KEY=VALUE`` into its base (the keys a
-grid takes: an episode field, ``settings.NAME``, ``sim.NAME``, ``args.NAME``, ``world.generator.NAME``; the value
-read as YAML). Each side runs as a sweep of its own (``OUTPUT/a``, ``OUTPUT/b``: rows, pictures of what failed,
+The sweep file's grid is the scenario set, or the episodes that failed in a search's folder (or a sweep's:
+``compare searches/NAME --b ...`` asks whether B fails where the search found A failing); ``--a`` and ``--b`` each
+put ``KEY=VALUE`` into the base (into each episode of a folder; the keys a grid takes: an episode field,
+``settings.NAME``, ``sim.NAME``, ``args.NAME``, ``world.generator.NAME``, ``start.x`` ...; the value read as
+YAML). Each side runs as a sweep of its own (``OUTPUT/a``, ``OUTPUT/b``: rows, pictures of what failed,
 its page, resumable with ``--resume``), on the same Dask cluster a sweep takes; then the episodes are paired by
 their place in the grid. A pair is a *regression* where A went as meant and B did not (collided, failed, timed
 out, could not run, or touched anything), a *fix* the other way round. Beside the counts: McNemar's exact test
@@ -92,6 +94,25 @@ def parse_changes(items, side):
     return changes
 
 
+def scenario_set(source, changes=None, suffix='', progress=None):
+    """The sweep one side runs: a sweep file's grid (``source`` a file, or the name of a shipped one) with
+    ``changes`` in its base; or the episodes that failed in a search's or a sweep's folder (``source`` a folder
+    holding rows.csv), ``changes`` put into each."""
+    if not os.path.isdir(source):
+        return sweep_file.load(source, progress, changes, suffix)
+    rows = [r for r in sweep.read_rows(os.path.join(source, 'rows.csv'))
+            if r.get('failing') == 'True' or r.get('failing') is None and pictures.is_failure(r['outcome'],
+                                                                                            r.get('contacts'))]
+    if not rows:
+        raise sweep_file.SweepError('%s: no failing episode in its rows.csv to compare on' % source)
+    for key in changes or ():
+        sweep_file.check_key(source, key, '--%s %s' % (suffix.lstrip('-'), key) if suffix else key)
+    specs = [({'failed_as': int(r['index'])},
+              EpisodeSpec.from_dict(sweep_file.apply(json.loads(r['spec']), changes or {}), source)) for r in rows]
+    name = os.path.basename(os.path.normpath(source)) + '-failures'
+    return sweep_file.Sweep(name + suffix, ['failed_as'], specs, text='the episodes that failed in %s' % source)
+
+
 def pair(rows_a, rows_b):
     """The :class:`Comparison` of two sides' rows (dicts of rows.csv) of one grid, paired by index."""
     from scipy import stats
@@ -150,7 +171,7 @@ def draw_a(pair_, output):
 def main(argv=None):
     parser = cli.parser('compare', ' '.join(__doc__.split('\n\n')[0].split()))
     parser.add_argument('spec', help='the sweep file whose grid is the scenario set (YAML), or the name of one this '
-                        'package ships')
+                        "package ships; or a search's (or a sweep's) folder: the episodes that failed in it")
     parser.add_argument('--a', action='append', metavar='KEY=VALUE', help="side A's change to the base (repeat it "
                         'for more)')
     parser.add_argument('--b', action='append', metavar='KEY=VALUE', help="side B's change to the base")
@@ -161,8 +182,8 @@ def main(argv=None):
     try:
         changes = {side: parse_changes(getattr(args, side), side) for side in ('a', 'b')}
         for side in ('a', 'b'):             # both sides checked before either runs
-            sweep_file.load(args.spec, changes=changes[side], suffix='-' + side)
-        name = sweep_file.load(args.spec).name
+            scenario_set(args.spec, changes[side], '-' + side)
+        name = scenario_set(args.spec).name
     except sweep_file.SweepError as error:
         print('compare: %s' % error, file=sys.stderr)
         return 2
@@ -170,8 +191,8 @@ def main(argv=None):
     rows, built = {}, {}
     for side in ('a', 'b'):
         status, built[side], rows[side] = sweep.run_command(
-            'compare: %s' % side.upper(), lambda s=side: sweep_file.load(args.spec, sweep.checking, changes[s],
-                                                                          '-' + s),
+            'compare: %s' % side.upper(), lambda s=side: scenario_set(args.spec, changes[s], '-' + s,
+                                                                       sweep.checking),
             os.path.join(output, side), args)
         if status:
             return status

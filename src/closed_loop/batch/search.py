@@ -4,25 +4,28 @@
 
 The search file is a sweep file's style (``closed_loop.batch.sweep_file``) with a space in place of a grid::
 
-    name: stop_search
-    base: {world: wall, controller: stop_on_obstacle, time_limit_s: 12}
+    name: avoid_search
+    base: {world: {generator: {method: barn, fill: 0.3}}, robot: jackal, controller: avoid_obstacles}
     space:                                  # the free parameters (the keys a grid takes)
-      settings.cruise_speed: {from: 0.1, to: 1.0}
-      settings.stop_distance: {from: 0.2, to: 1.0}
-      world.generator.seed: {from: 0, to: 999, int: true}     # (a generated world's seed)
-      robot: [closed_loop, burger]                             # a list: one of these
+      world.generator.seed: {from: 0, to: 999, int: true}      # whole numbers
+      start.x: {from: 0.0, to: 0.5}                            # the start (x and y both; yaw 0 unless given)
+      start.y: {from: -1.0, to: 1.0}                           # and the goal (goal.x, goal.y), a coordinate each
+      start.yaw: {from: -0.5, to: 0.5}
+      settings.max_speed: {from: 0.3, to: 1.0}
+      scan_noise: [0.0, 0.005]                                 # a list: one of these
     budget: 60                              # episodes, at most
     batch: 4                                # episodes asked for at once (the same search on any cluster)
     seed: 0
     sampler: tpe                            # tpe (default), cmaes, or random (uniform, to compare against)
-    failure: {min_clearance: 0.05, max_time: 20}
+    failure: {min_clearance: 0.05, max_time: 60, max_goal_error: 0.5}
 
 An episode *fails* when it did not go as meant (collided, failed, timed out, could not run, touched anything;
-``failure.outcomes`` narrows the outcomes), came closer than ``failure.min_clearance`` (m), or took longer than
-``failure.max_time`` (s). The search steers by how near each episode came to failing: its objective, which
-Optuna's sampler (TPE by default; CMA-ES; uniform random) minimises, is -1 for a failure and otherwise the least of
-its margins, each in [0, 1]: the least clearance above ``min_clearance`` (capped at 1 m), and the time left under
-``max_time`` as a share of it. Batches of ``batch`` episodes run on the sweep's Dask cluster (local by default);
+``failure.outcomes`` narrows the outcomes), came closer than ``failure.min_clearance`` (m), took longer than
+``failure.max_time`` (s), or ended farther than ``failure.max_goal_error`` (m) from its goal. The search steers by
+how near each episode came to failing: its objective, which Optuna's sampler (TPE by default; CMA-ES; uniform
+random) minimises, is -1 for a failure and otherwise the least of its margins, each in [0, 1]: the least clearance
+above ``min_clearance`` (capped at 1 m), and the time left under ``max_time`` and the goal error left under
+``max_goal_error``, each as a share of its limit. Batches of ``batch`` episodes run on the sweep's Dask cluster (local by default);
 each episode is a row of ``OUTPUT/rows.csv`` as a sweep's (its parameters, ``objective``, ``failing``, the
 result), ``--resume`` tells the sampler the rows already there and goes on, and the failures get pictures and
 ``OUTPUT/report.html``. Free of ROS (the episodes it runs may be graph episodes).
@@ -39,7 +42,7 @@ from closed_loop.batch import pictures, rows_file, sweep, sweep_file, sweep_repo
 from closed_loop.yaml_check import Checker, FileError, load_yaml, quote, read_text
 
 TOP_KEYS = ('name', 'base', 'space', 'budget', 'batch', 'seed', 'sampler', 'failure', 'report')
-FAILURE_KEYS = ('outcomes', 'min_clearance', 'max_time')
+FAILURE_KEYS = ('outcomes', 'min_clearance', 'max_time', 'max_goal_error')
 SAMPLERS = ('tpe', 'cmaes', 'random')
 MAX_BUDGET, MAX_BATCH, MAX_CORNERS = 100000, 256, 64
 #: Least clearance (m) beyond which more adds nothing to an episode's margin.
@@ -65,6 +68,7 @@ class Search:
     outcomes: tuple
     min_clearance: float
     max_time: float
+    max_goal_error: float
     report: dict
     text: str
 
@@ -108,7 +112,7 @@ def load(path):
     if not outcomes or not set(outcomes) <= set(pictures.FAILING):
         fail('failure.outcomes', 'some of %s' % ', '.join(pictures.FAILING), failure.get('outcomes'))
     limits = []
-    for field in ('min_clearance', 'max_time'):
+    for field in ('min_clearance', 'max_time', 'max_goal_error'):
         value = failure.get(field)
         if value is not None and (isinstance(value, bool) or not isinstance(value, (int, float))
                                   or not math.isfinite(value) or value <= 0):
@@ -117,7 +121,7 @@ def load(path):
     base = data.get('base', {})
     if not isinstance(base, dict):
         fail('base', 'a mapping of episode fields', base)
-    search = Search(name, base, space, budget, batch, seed, sampler, outcomes, limits[0], limits[1],
+    search = Search(name, base, space, budget, batch, seed, sampler, outcomes, *limits,
                     sweep_file.check_report(path, data.get('report')), text)
     # The corners of the space (each range's ends, each choice; with more than MAX_CORNERS of them, each key's
     # with the others at their first), checked as a sweep checks its grid's values, before anything runs.
@@ -159,14 +163,17 @@ def judged(search, result):
     """(objective, failing) of an episode's ``result`` (a row's result columns): the module's docstring."""
     clearance = _number(result.get('min_clearance_m'), math.inf)
     time_s = _number(result.get('time_s'), 0.0)
+    error = _number(result.get('goal_error_m'), None)
     failing = (result['outcome'] in search.outcomes or _number(result.get('contacts'), 0) > 0
                or search.min_clearance is not None and clearance < search.min_clearance
-               or search.max_time is not None and time_s > search.max_time)
+               or search.max_time is not None and time_s > search.max_time
+               or search.max_goal_error is not None and error is not None and error > search.max_goal_error)
     if failing:
         return -1.0, True
     margins = [max(0.0, min(clearance, CLEARANCE_CAP_M) - (search.min_clearance or 0.0)) / CLEARANCE_CAP_M]
-    if search.max_time is not None:
-        margins.append(max(0.0, search.max_time - time_s) / search.max_time)
+    for limit, value in ((search.max_time, time_s), (search.max_goal_error, error)):
+        if limit is not None and value is not None:
+            margins.append(max(0.0, limit - value) / limit)
     return min(margins), False
 
 

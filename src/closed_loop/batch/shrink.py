@@ -9,8 +9,10 @@ kept only while the episode still fails so:
 1. fewer obstacles: delta debugging over the world's obstacles (Zeller and Hildebrandt's ddmin, :func:`ddmin`:
    halves, then quarters, ..., of the list tried alone and left out, until no single obstacle can go), the
    robot's start and goal as they were;
-2. a shorter time limit: a second past the end the failing episode came to;
-3. its controller's settings rounded, each to two decimals (then one), where the failure holds.
+2. a start nearer where it went wrong: where the robot was 1, 2, 4 or 8 s before the failure (the nearest that
+   still fails; it starts there at rest);
+3. a shorter time limit: a second past the end the failing episode came to;
+4. its controller's settings rounded, each to two decimals (then one), where the failure holds.
 
 The result, in ``OUTPUT`` (default: ``shrunk/NAME-INDEX``): ``world.yaml`` (the obstacles left, in this package's
 world format), ``regression.test`` (a rostest of ``scenario.launch`` and ``scenario_test`` that expects the
@@ -33,6 +35,8 @@ from closed_loop.batch.episode import EpisodeError, EpisodeSpec, prepare, run_ep
 
 #: A shrunk episode's time limit: this long (s) past when the failing episode ended.
 TIME_PAST_END_S = 1.0
+#: How far (s) before the failure a shrunk episode may start, nearest first: where the robot was then (at rest).
+START_BACK_S = (1.0, 2.0, 4.0, 8.0)
 #: The most episodes a shrink may run.
 MAX_EPISODES = 2000
 
@@ -96,6 +100,7 @@ class Shrinker:
             result = run_episode(spec, {})
         except EpisodeError:
             return False
+        self.last = result
         return result.outcome == self.result.outcome and (result.contacts > 0) == (self.result.contacts > 0)
 
     def shrink(self):
@@ -105,7 +110,17 @@ class Shrinker:
         spec = dataclasses.replace(self.spec, world=self.world_file(obstacles))
         self.stream.write('shrink: %d of %d obstacles left (%d episodes)\n'
                           % (len(obstacles), len(self.raw['obstacles']), self.runs))
-        shorter = min(spec.time_limit_s, math.ceil(self.result.time_s + TIME_PAST_END_S))
+        ended_s = self.result.time_s
+        traced = run_episode(dataclasses.replace(spec, keep_trajectory=True), {})
+        for back in START_BACK_S:              # the nearest start to the failure from which it still fails
+            rows = [r for r in traced.trajectory or () if r[0] <= traced.time_s - back]
+            if traced.time_s - back <= 0.0 or not rows:
+                continue
+            moved = dataclasses.replace(spec, sim=dict(spec.sim, start='%.4f %.4f %.4f' % tuple(rows[-1][1:4])))
+            if self.fails(moved):
+                spec, ended_s = moved, self.last.time_s
+                break
+        shorter = min(spec.time_limit_s, math.ceil(ended_s + TIME_PAST_END_S))
         if shorter < spec.time_limit_s and self.fails(dataclasses.replace(spec, time_limit_s=float(shorter))):
             spec = dataclasses.replace(spec, time_limit_s=float(shorter))
         for key, value in sorted(spec.settings.items()):
@@ -144,6 +159,8 @@ def regression_test(spec, world_name='world.yaml'):
     params = ''.join('  <param name="/controller/%s" value="%s"/>\n' % (k, v) for k, v in sorted(spec.settings.items()))
     goal = ''.join('    <arg name="goal_%s" value="%r"/>\n' % (axis, value)
                    for axis, value in zip('xy', spec.goal)) if spec.goal else ''
+    if spec.sim.get('start'):
+        goal += '    <arg name="start" value="%s"/>\n' % spec.sim['start']
     return ('<launch>\n  <!-- The smallest case found of a failure (rosrun closed_loop shrink): it fails until the '
             'controller is fixed. -->\n%s  <include file="$(find closed_loop)/launch/scenario.launch">\n'
             '    <arg name="world" value="$(dirname)/%s"/>\n    <arg name="robot" value="%s"/>\n%s%s'

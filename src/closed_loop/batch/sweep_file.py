@@ -48,6 +48,8 @@ SPEC_FIELDS = tuple(EpisodeSpec.__dataclass_fields__)
 NAME_PATTERN = re.compile(r'^[A-Za-z0-9_-]{1,64}$')
 #: A sweep file's keys, and its largest size (bytes).
 TOP_KEYS, MAX_FILE_BYTES = ('name', 'base', 'grid', 'plot', 'report'), 1024 * 1024
+#: Keys of a grid (or a search's space) that place the robot's start and its goal, a coordinate each.
+POSE_KEYS = ('start.x', 'start.y', 'start.yaw', 'goal.x', 'goal.y')
 #: A grid may not have more combinations than this (a typo in a range should not start a million).
 MAX_EPISODES = 1000000
 #: A grid of at most this many combinations has each one checked before anything runs (about 0.2 ms each);
@@ -169,18 +171,25 @@ def check_key(source, key, field=None):
         return
     if key.startswith('world.generator.') and key.count('.') == 2:
         return
+    if key in POSE_KEYS:
+        return
     if key in SPEC_FIELDS and key not in ('settings', 'sim'):
         return
     raise SweepError('%s: %s: expected an episode field (%s), settings.NAME, sim.NAME, args.NAME (a graph '
-                     "controller's launch arg) or world.generator.NAME"
+                     "controller's launch arg), world.generator.NAME, start.x, start.y, start.yaw, goal.x or goal.y"
                      % (source, field or 'grid.' + key, ', '.join(f for f in SPEC_FIELDS if f not in ('settings', 'sim'))))
 
 
 def apply(base, assignment):
-    """The spec fields of ``base`` (a dict) with the grid's ``assignment`` ({key: value}) put in."""
+    """The spec fields of ``base`` (a dict) with the grid's ``assignment`` ({key: value}) put in. ``start.x``,
+    ``start.y`` and ``start.yaw`` make the simulator's ``sim.start`` ('x y yaw': x and y both, over a start the
+    base gives; yaw 0 unless given), ``goal.x`` and ``goal.y`` the episode's ``goal``."""
     fields = {k: (dict(v) if isinstance(v, dict) else v) for k, v in base.items()}
+    _apply_poses(fields, {k: v for k, v in assignment.items() if k in POSE_KEYS})
     for key, value in assignment.items():
         head, _, rest = key.partition('.')
+        if key in POSE_KEYS:
+            continue
         if head in ('settings', 'sim'):
             fields[head] = dict(fields.get(head) or {}, **{rest: value})
         elif head == 'args':
@@ -269,6 +278,25 @@ def _check(grid, progress):
         if progress is not None and time.monotonic() - told > PROGRESS_S:
             progress(done, total)
             told = time.monotonic()
+
+
+def _apply_poses(fields, poses):
+    """``sim.start`` and ``goal`` in ``fields`` from ``poses`` ({start.x: ..., goal.y: ...})."""
+    start = {k[len('start.'):]: v for k, v in poses.items() if k.startswith('start.')}
+    if start:
+        given = str((fields.get('sim') or {}).get('start') or '').split()
+        x, y, yaw = (given + ['0'] * 3)[:3] if len(given) == 3 else (None, None, '0')
+        x, y, yaw = start.get('x', x), start.get('y', y), start.get('yaw', yaw)
+        if x is None or y is None:
+            raise SweepError('start.x, start.y: expected both (or a base with sim.start), got %s' % quote(start))
+        fields['sim'] = dict(fields.get('sim') or {}, start='%s %s %s' % (x, y, yaw))
+    goal = {k[len('goal.'):]: v for k, v in poses.items() if k.startswith('goal.')}
+    if goal:
+        given = fields.get('goal') or (None, None)
+        x, y = goal.get('x', given[0]), goal.get('y', given[1])
+        if x is None or y is None:
+            raise SweepError('goal.x, goal.y: expected both (or a base with a goal), got %s' % quote(goal))
+        fields['goal'] = [x, y]
 
 
 def shipped():
