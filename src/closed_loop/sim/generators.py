@@ -1,6 +1,7 @@
 """Generated worlds, by method: ``corridor`` (``closed_loop.sim.clutter``: obstacles on a jittered grid round a
-bent corridor, the default) and ``barn`` (``closed_loop.sim.barn``: a cellular automaton's posts, as the BARN
-benchmark builds its worlds). An episode names one as ``world: {generator: {method: barn, seed: 3, ...}}``
+bent corridor, the default), ``barn`` (``closed_loop.sim.barn``: a cellular automaton's posts, as the BARN
+benchmark builds its worlds) and ``crossing`` (``closed_loop.sim.crossing``: a walker crossing the robot's way,
+its speed, place and start the settings). An episode names one as ``world: {generator: {method: barn, seed: 3, ...}}``
 (no method: corridor); ``generate_world`` (``python3 -m closed_loop.sim.generators``) writes them to files.
 Free of ROS.
 """
@@ -14,12 +15,13 @@ from dataclasses import asdict, fields
 import yaml
 
 from closed_loop import cli
-from closed_loop.sim import barn, barn_metrics, clutter
+from closed_loop.sim import barn, barn_metrics, clutter, crossing
 from closed_loop.sim.profiles import ProfileError, load_profile
 from closed_loop.sim.world import WorldError
 
 #: method -> (its settings class, its generate(settings, profile)).
-METHODS = {'corridor': (clutter.ClutterSettings, clutter.generate), 'barn': (barn.BarnSettings, barn.generate)}
+METHODS = {'corridor': (clutter.ClutterSettings, clutter.generate), 'barn': (barn.BarnSettings, barn.generate),
+           'crossing': (crossing.CrossingSettings, crossing.generate)}
 DEFAULT_METHOD = 'corridor'
 #: Generated worlds kept per process (the same world in many episodes is made once).
 CACHED_WORLDS = 64
@@ -44,7 +46,7 @@ def settings_from(values, profile_name):
                              % (unknown[0], method, ', '.join(sorted(names))))
     try:
         return cls(**dict({'profile': profile_name}, **values)).check()
-    except (clutter.ClutterError, barn.BarnError) as error:
+    except (clutter.ClutterError, barn.BarnError, crossing.CrossingError) as error:
         raise GeneratorError(str(error))
 
 
@@ -61,7 +63,7 @@ def generate(settings, profile=None):
 def _generate(settings, profile_name):
     try:
         return METHODS[method_of(settings)][1](settings, load_profile(profile_name))
-    except (clutter.ClutterError, barn.BarnError) as error:
+    except (clutter.ClutterError, barn.BarnError, crossing.CrossingError) as error:
         raise GeneratorError(str(error))
 
 
