@@ -2,8 +2,12 @@
 stop_on_obstacle (it neither slows nor stops before 5 cm) against the shipped one: every pair a regression,
 exit 1, the page with the pairs and A beside B, and with the gate raised, exit 0; a bad change: refused. (A side
 against itself, no regression: test/unit/test_compare_pairs.py.)"""
+import csv
+import json
 import os
 import re
+import subprocess
+import sys
 
 from closed_loop.batch import compare
 
@@ -66,3 +70,63 @@ def test_the_failures_a_search_found_are_a_set_to_compare_a_fix_on(tmp_path, cap
                          '--b', 'settings.stop_distance=0.5', '--b', 'settings.slow_distance=1.0']) == 0
     said = capsys.readouterr().out
     assert '%d pairs: 0 regressions (A as meant, B not), %d fixes' % (failing, failing) in said, said
+
+
+LAUNCH = """<launch>
+  <node pkg="closed_loop" type="stop_on_obstacle" name="stop_on_obstacle" output="screen">
+    <param name="cruise_speed" value="0.6"/>
+    <param name="stop_distance" value="%s"/>
+    <param name="slow_distance" value="%s"/>
+  </node>
+</launch>
+"""
+CMAKE = """cmake_minimum_required(VERSION 3.0.2)
+project(lane_stop)
+find_package(catkin REQUIRED)
+catkin_package()
+install(DIRECTORY launch DESTINATION ${CATKIN_PACKAGE_SHARE_DESTINATION})
+"""
+MANIFEST = """<?xml version="1.0"?>
+<package format="2">
+  <name>lane_stop</name>
+  <version>0.1.0</version>
+  <description>A stop-on-obstacle launch file, as two branches of it have it.</description>
+  <maintainer email="dev@example.com">dev</maintainer>
+  <license>BSD</license>
+  <buildtool_depend>catkin</buildtool_depend>
+  <exec_depend>closed_loop</exec_depend>
+</package>
+"""
+
+
+def lane_stop_workspace(root, stop_distance, slow_distance):
+    """A catkin workspace of its own with the package lane_stop, built with catkin_make."""
+    package = root / 'src' / 'lane_stop'
+    (package / 'launch').mkdir(parents=True)
+    (package / 'launch' / 'stop.launch').write_text(LAUNCH % (stop_distance, slow_distance))
+    (package / 'CMakeLists.txt').write_text(CMAKE)
+    (package / 'package.xml').write_text(MANIFEST)
+    build = subprocess.run(['catkin_make', '-C', str(root), '-DPYTHON_EXECUTABLE=' + sys.executable],
+                           stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=600)
+    assert build.returncode == 0, build.stdout[-4000:]
+    return str(root)
+
+
+def test_the_same_launch_file_from_two_workspaces_is_compared(tmp_path, capsys):
+    """One launch file, lane_stop/launch/stop.launch, as two workspaces have it (B's stops at 5 cm): the graph episodes of
+    each side run the launch file of their own workspace, with this package's simulator and judge."""
+    before = lane_stop_workspace(tmp_path / 'ws_main', 0.5, 1.0)
+    after = lane_stop_workspace(tmp_path / 'ws_change', 0.05, 0.06)
+    spec = tmp_path / 'lane.yaml'
+    spec.write_text('name: lane\nbase: {world: wall, time_limit_s: 15, controller: {launch: lane_stop/launch/stop.launch, '
+                    'mode_topic: /stop_on_obstacle/mode}}\ngrid:\n  time_limit_s: [15]\n')
+    out = tmp_path / 'out'
+    assert compare.main([str(spec), '--output', str(out), '--workers', '1', '--a', 'controller.workspace=' + before,
+                         '--b', 'controller.workspace=' + after]) == 1
+    said = capsys.readouterr().out
+    assert '1 pairs: 1 regressions (A as meant, B not), 0 fixes' in said, said
+    for side, outcome, workspace in (('a', 'stopped', before), ('b', 'collided', after)):
+        with open(str(out / side / 'rows.csv'), newline='') as f:
+            row, = csv.DictReader(f)
+        assert row['outcome'] == outcome and row['error'] == '', row
+        assert workspace in json.loads(row['spec'])['controller']['workspace']

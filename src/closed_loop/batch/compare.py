@@ -3,11 +3,14 @@
     rosrun closed_loop compare SWEEP.yaml --a settings.stop_distance=0.5 --b settings.stop_distance=0.3
     rosrun closed_loop compare my_sweep.yaml --a controller='{launch: my_pkg/old.launch}' \\
                                              --b controller='{launch: my_pkg/new.launch}' --max-regressions 0
+    rosrun closed_loop compare my_sweep.yaml --a controller.workspace=/home/me/ws_main \\
+                                             --b controller.workspace=/home/me/ws_branch
 
 The sweep file's grid is the scenario set, or the episodes that failed in a search's folder (or a sweep's:
 ``compare searches/NAME --b ...`` asks whether B fails where the search found A failing); ``--a`` and ``--b`` each
 put ``KEY=VALUE`` into the base (into each episode of a folder; the keys a grid takes: an episode field,
-``settings.NAME``, ``sim.NAME``, ``args.NAME``, ``world.generator.NAME``, ``start.x`` ...; the value read as
+``settings.NAME``, ``sim.NAME``, ``args.NAME``, ``controller.workspace`` (the same launch file as another catkin
+workspace has it, ``closed_loop.batch.workspace``), ``world.generator.NAME``, ``start.x`` ...; the value read as
 YAML). Each side runs as a sweep of its own (``OUTPUT/a``, ``OUTPUT/b``: rows, pictures of what failed,
 its page, resumable with ``--resume``), on the same Dask cluster a sweep takes; then the episodes are paired by
 their place in the grid. A pair is a *regression* where A went as meant and B did not (collided, failed, timed

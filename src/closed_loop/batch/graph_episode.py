@@ -27,9 +27,10 @@ from xml.sax.saxutils import quoteattr
 import yaml
 
 from closed_loop import launcher
-from closed_loop.batch import graph_keeper
+from closed_loop.batch import graph_keeper, workspace
 from closed_loop.batch.spec import EpisodeError, generated_world, judge_settings, result_from_verdict
 from closed_loop.batch.judge import Verdict, track_from_dict
+from closed_loop.sim.profiles import PACKAGE_ROOT
 
 #: Wall time (s) a graph gets to start, and its slack beyond the scenario's simulated time (in lockstep, the
 #: scenario's simulated time counts as wall time: a lockstepped graph slower than real time is waited for).
@@ -167,6 +168,8 @@ def run_graph(spec, prepared, folder=None, bag=None):
         env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
                    PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))),
                    **{launcher.MARK: mark})
+        if prepared.graph.get('workspace'):
+            env = workspace.environment(prepared.graph['workspace'], env, PACKAGE_ROOT, KEEPER_PATH)
         with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
             keeper = subprocess.Popen([sys.executable, '-m', graph_keeper.__name__, folder, launch_file],
                                       stdin=subprocess.PIPE,

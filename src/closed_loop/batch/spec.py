@@ -11,6 +11,7 @@ from typing import Optional
 from closed_loop.sim import barn_score, generators
 from closed_loop.controllers import ControllerError, controller_class, controller_classes
 from closed_loop.sim.profiles import PACKAGE_ROOT, load_profile
+from closed_loop.batch import workspace
 from closed_loop.batch.judge import JudgeSettings, Verdict
 from closed_loop.sim.rig import Rig
 from closed_loop.settings import SettingsError, check
@@ -23,7 +24,7 @@ SUCCESS_RADIUS_M = JudgeSettings().success_radius
 
 
 #: The keys of a graph episode's controller mapping, and what a package name and an arg name look like.
-CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest')
+CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest', 'workspace')
 PACKAGE = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
 ARG_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 
@@ -43,7 +44,8 @@ class EpisodeSpec:
     ``end_on_contact``: end the episode at the physics step of its first contact (outcome 'collided',
     one contact), where a sweep asks only whether there was one. A ``controller`` that is a mapping makes a
     graph episode (``closed_loop.batch.graph_episode``): ``{launch: PKG/path.launch, args: {...}}`` or
-    ``{node: NAME}``, its simulator in lockstep with it (``real_time_factor`` None), or in real time at that many
+    ``{node: NAME}`` (``workspace: PATH``: the launch file's package as that catkin workspace has it,
+    ``closed_loop.batch.workspace``), its simulator in lockstep with it (``real_time_factor`` None), or in real time at that many
     simulated s per wall s, for a node that cannot be lockstepped. ``command_delay_s`` is when a command reaches
     the wheels, in process and in a lockstepped graph alike."""
     world: object = 'wall'
@@ -297,6 +299,15 @@ def parse_controller(value, node_names):
         if not isinstance(arg, (str, int, float, bool)) or '$(' in str(arg):
             raise EpisodeError('controller.args.%s: expected a string, number or boolean (no $(...) substitution), '
                                'got %s' % (name, quote(arg)))
+    if 'workspace' in value:
+        place = value['workspace']
+        if not isinstance(place, str) or not os.path.isabs(os.path.expanduser(place)):
+            raise EpisodeError('controller.workspace: expected the absolute path of a catkin workspace, got %s'
+                               % (quote(place),))
+        try:
+            workspace.prefix_of(place)
+        except workspace.WorkspaceError as error:
+            raise EpisodeError('controller.workspace: %s' % error)
     if not isinstance(value.get('mode_topic', ''), str) or not isinstance(value.get('end_at_rest', True), bool):
         raise EpisodeError('controller: mode_topic is a topic name and end_at_rest true or false')
     return value

@@ -50,6 +50,8 @@ NAME_PATTERN = re.compile(r'^[A-Za-z0-9_-]{1,64}$')
 TOP_KEYS, MAX_FILE_BYTES = ('name', 'base', 'grid', 'plot', 'report'), 1024 * 1024
 #: Keys of a grid (or a search's space) that place the robot's start and its goal, a coordinate each.
 POSE_KEYS = ('start.x', 'start.y', 'start.yaw', 'goal.x', 'goal.y')
+#: The catkin workspace a graph controller's launch file comes from (``closed_loop.batch.workspace``).
+WORKSPACE_KEY = 'controller.workspace'
 #: A grid may not have more combinations than this (a typo in a range should not start a million).
 MAX_EPISODES = 1000000
 #: A grid of at most this many combinations has each one checked before anything runs (about 0.2 ms each);
@@ -171,12 +173,12 @@ def check_key(source, key, field=None):
         return
     if key.startswith('world.generator.') and key.count('.') == 2:
         return
-    if key in POSE_KEYS:
+    if key in POSE_KEYS or key == WORKSPACE_KEY:
         return
     if key in SPEC_FIELDS and key not in ('settings', 'sim'):
         return
     raise SweepError('%s: %s: expected an episode field (%s), settings.NAME, sim.NAME, args.NAME (a graph '
-                     "controller's launch arg), world.generator.NAME, start.x, start.y, start.yaw, goal.x or goal.y"
+                     "controller's launch arg), controller.workspace, world.generator.NAME, start.x, start.y, start.yaw, goal.x or goal.y"
                      % (source, field or 'grid.' + key, ', '.join(f for f in SPEC_FIELDS if f not in ('settings', 'sim'))))
 
 
@@ -198,6 +200,12 @@ def apply(base, assignment):
                 raise SweepError('grid.%s: args vary a launch file\'s args: the base needs controller: '
                                  '{launch: PKG/path.launch}' % key)
             fields['controller'] = dict(controller, args=dict(controller.get('args') or {}, **{rest: value}))
+        elif key == WORKSPACE_KEY:
+            controller = fields.get('controller')
+            if not isinstance(controller, dict):
+                raise SweepError('%s: a workspace is where a graph controller comes from: the base needs controller: '
+                                 '{launch: PKG/path.launch}' % key)
+            fields['controller'] = dict(controller, workspace=value)
         elif head == 'world' and rest:
             world = fields.get('world')
             generator = dict(world['generator']) if isinstance(world, dict) and 'generator' in world else {}
