@@ -32,6 +32,10 @@ CASES = (
      '{world: {generator: {method: crossing}}, controller: avoid_obstacles, time_limit_s: 25}',
      {'world.generator.walker_speed': (0.3, 2.0), 'world.generator.walker_start': (1.0, 3.5),
       'world.generator.crossing_x': (1.5, 5.0)}, tuple(range(4)), 30),
+    ('stop_on_obstacle with a blind sector (its front sector 0.1 rad each side) at a box off its line',
+     '{world: red_box, controller: stop_on_obstacle, time_limit_s: 12, settings: {front_half_angle: 0.1}, '
+     'sim: {start: "0 0 0"}}',
+     {'start.y': (-1.0, 1.0), 'start.yaw': (-0.3, 0.3)}, tuple(range(6)), 40),
 )
 TEXT = """name: bench_search
 base: %s
@@ -61,14 +65,16 @@ def one(folder, case, sampler, seed):
     return len(failing), len(cells), min((int(r['index']) for r in failing), default=None)
 
 
-def main():
-    for case in CASES:
+def main(argv=None):
+    """Every case, or those whose numbers (from 1) are given."""
+    chosen = [int(a) for a in (sys.argv[1:] if argv is None else argv)] or range(1, len(CASES) + 1)
+    for case in [CASES[i - 1] for i in chosen]:
         name, _, _, seeds, budget = case
         print(name)
-        figures = {'tpe': [], 'random': []}
+        figures = {s: [] for s in os.environ.get('BENCH_SAMPLERS', 'tpe random').split()}
         with tempfile.TemporaryDirectory() as folder:
             for seed in seeds:
-                for sampler in figures:
+                for sampler in os.environ.get('BENCH_SAMPLERS', 'tpe random').split():
                     figures[sampler].append(one(folder, case, sampler, seed))
                     found, distinct, first = figures[sampler][-1]
                     print('  seed %d, %-6s: %2d failures, %2d distinct, the first at episode %s'
