@@ -1,5 +1,5 @@
 """Graph episodes leave nothing behind: no process of their graphs and no master's port still listening, after
-a sweep of four of them (half of which hit their time limit), after a worker is killed in the middle of one,
+a sweep of two of them (one of which hits its time limit), after a worker is killed in the middle of one,
 and after Ctrl-C. The controller is this package's stop_on_obstacle run as its node (``{node: ...}``)."""
 import csv
 import os
@@ -44,18 +44,18 @@ def running_keepers(root):
     return keepers
 
 
-def test_four_graph_episodes_half_of_them_timed_out_leave_no_process_and_no_port(tmp_path):
-    sweep = write_sweep(tmp_path, 'four', '[2, 30]', '[0, 1]', 8)
+def test_graph_episodes_one_of_them_timed_out_leave_no_process_and_no_port(tmp_path):
+    sweep = write_sweep(tmp_path, 'two', '[2, 30]', '[0]', 8)
     done, rows = run_sweep(os.environ, sweep, tmp_path / 'out', '--workers', '2', timeout_s=SWEEP_TIMEOUT_S)
     assert done.returncode == 0, done.stdout[-3000:]
-    assert sorted(rows) == list(range(4))
+    assert sorted(rows) == list(range(2))
     outcomes = sorted((r['time_limit_s'], r['outcome']) for r in rows.values())
-    assert outcomes == [('2', 'timed_out')] * 2 + [('30', 'stopped')] * 2, outcomes
+    assert outcomes == [('2', 'timed_out'), ('30', 'stopped')], outcomes
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
 
 
 def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
-    sweep = write_sweep(tmp_path, 'killed', '[30]', '[0, 1, 2]', 2)
+    sweep = write_sweep(tmp_path, 'killed', '[30]', '[0, 1]', 2)
     out = tmp_path / 'out'
     process = start_sweep(sweep, out)
     try:
@@ -69,7 +69,7 @@ def test_a_killed_worker_leaves_nothing_and_its_episode_runs_again(tmp_path):
     errors = ['%s: %s' % (r['index'], r['error']) for r in rows if r['outcome'] == 'error']
     assert process.returncode == 0, '%s\nerror rows: %s' % (text[-3000:], errors)
     indices = sorted(int(r['index']) for r in rows)
-    assert indices == [0, 1, 2], indices                    # each once
+    assert indices == [0, 1], indices                       # each once
     assert any(name.endswith('.attempt-1') for name in os.listdir(str(out / 'graphs'))), os.listdir(str(out / 'graphs'))
     assert graph_leftovers(out) == {'processes': [], 'listening': []}
 
