@@ -48,7 +48,10 @@ fi
 want=$(sha256sum requirements.txt | cut -d' ' -f1)
 if [ "$(cat "$req_stamp" 2>/dev/null)" != "$want" ]; then
   echo "provision: installing requirements.txt into $venv"
-  "$venv/bin/python3" -m pip install -q --disable-pip-version-check -r requirements.txt
+  # pip compiles each package's modules one after another; compileall does the same on every core (39 s -> 29 s
+  # for the whole install on 2 cores).
+  "$venv/bin/python3" -m pip install -q --no-compile --disable-pip-version-check -r requirements.txt
+  "$venv/bin/python3" -m compileall -q -j 0 "$venv/lib" >/dev/null
   echo "$want" > "$req_stamp"
 fi
 export PATH="$venv/bin:$PATH"
@@ -83,8 +86,12 @@ fi
 # The compiled loops (numba: the LIDAR's planar caster and its grid, the navigator's wave and arcs, a mesh's
 # footprint), compiled into the source tree's __pycache__ once here, not by the first processes of a test run,
 # all at once. Loading them when they are there takes a fraction of a second.
-PYTHONPATH="$root/src" "$venv/bin/python3" -c 'from closed_loop.control.navigation import window
-from closed_loop.sim import mesh_footprint, planar_rays
-window.prepare()
-planar_rays.prepare()
-mesh_footprint.prepare()'
+# The three sets at once, each in a process of its own (on 2 cores, 6 s where one after another took 12 s).
+warm=()
+for module in closed_loop.control.navigation.window closed_loop.sim.planar_rays closed_loop.sim.mesh_footprint; do
+  PYTHONPATH="$root/src" "$venv/bin/python3" -c "import $module as m; m.prepare()" &
+  warm+=($!)
+done
+for pid in "${warm[@]}"; do
+  wait "$pid" || { echo "provision: compiling the loops failed" >&2; exit 1; }
+done

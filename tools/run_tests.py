@@ -19,6 +19,7 @@ Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests
 it needs: test/machine.py) and each failed; the exit status is non-zero if anything failed or nothing ran.
 """
 import argparse
+import concurrent.futures
 import functools
 import glob
 import os
@@ -71,11 +72,15 @@ def run_launch_checks(args):
     passed = failed = 0
     names = []
     print('== roslaunch-check %s' % ' '.join(os.path.basename(f) for f in files), flush=True)
-    for path in files:
+
+    def check(path):
+        xml = os.path.join(results_dir, os.path.splitext(os.path.basename(path))[0] + '.xml')
+        return xml, subprocess.run([script, '-o', xml, '-t', path], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   cwd=ROOT)
+    with concurrent.futures.ThreadPoolExecutor(os.cpu_count() or 1) as pool:      # (each a process of its own)
+        checked = list(pool.map(check, files))
+    for path, (xml, out) in zip(files, checked):
         name = os.path.splitext(os.path.basename(path))[0]
-        xml = os.path.join(results_dir, name + '.xml')
-        out = subprocess.run([script, '-o', xml, '-t', path], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
-                             cwd=ROOT)
         p, f, _, _ = count_junit(xml) if os.path.exists(xml) else (0, 0, [], [])
         if out.returncode != 0 or f or not p:
             failed += 1
