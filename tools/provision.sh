@@ -8,19 +8,19 @@ cd "$root"
 # Debian bookworm's own ROS 1 (in /usr) and every program the tests run, each named here even where a minimal
 # Debian (debootstrap's minbase, the usual container image) already has it: chromium opens a sweep's report.html;
 # util-linux gives unshare (the browser and a graph kept off the network, a full disk in a mount namespace),
-# nsenter and setpriv; iproute2 gives ip and ss; procps gives pgrep; x11-apps gives xwd. package.xml declares
-# each by its rosdep key (test/unit/test_packaging.py keeps the lists together).
+# nsenter and setpriv; iproute2 gives ip and ss; procps gives pgrep; x11-apps gives xwd; openssl checks a cluster's
+# certificates. package.xml declares each by its rosdep key (test/unit/test_packaging.py keeps the lists together).
 APT_PACKAGES=(
   catkin python3-catkin-pkg python3-setuptools python3-venv python3-pip python3-pytest python3-yaml
   python3-rospy python3-rosgraph python3-rospkg python3-rostest python3-rosbag python3-roslaunch python3-rosmaster
   python3-rosnode python3-rostopic python3-rosservice python3-rosparam python3-rosmsg python3-rosgraph-msgs
-  python3-tf2-ros python3-tf2-msgs
+  python3-tf2-ros python3-tf2-msgs python3-cryptography
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
   python3-visualization-msgs python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs
   librostest-dev rosout rosbash ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
   libroscpp-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
-  chromium util-linux mount hostname coreutils iproute2 procps git
+  chromium util-linux mount hostname coreutils iproute2 procps git openssl
 )
 missing=()
 for p in "${APT_PACKAGES[@]}"; do

@@ -55,7 +55,7 @@ PROGRAMS = {
     'roslaunch': ('python3-roslaunch', 'roslaunch'), 'rosmaster': ('python3-rosmaster', 'rosmaster'),
     'rostest': ('python3-rostest', 'rostest'), 'rosbag': ('python3-rosbag', 'rosbag'),
     'rostopic': ('python3-rostopic', 'rostopic'), 'rosparam': ('python3-rosparam', 'rosparam'),
-    'rosrun': ('rosbash', 'rosbash'), 'dpkg-query': ('dpkg', None),
+    'rosrun': ('rosbash', 'rosbash'), 'dpkg-query': ('dpkg', None), 'openssl': ('openssl', 'openssl'),
 }
 #: Debian's Essential packages, on every Debian system and never removed: provisioning need not name them.
 ESSENTIAL = {'bash', 'dpkg'}
@@ -136,6 +136,7 @@ MODULES = {
     'dask': ('pip:dask', None), 'distributed': ('pip:distributed', None),
     'trimesh': ('pip:trimesh', 'python3-trimesh-pip'), 'collada': ('pip:pycollada', 'python3-collada'),
     'scipy': ('pip:scipy', 'python3-scipy'), 'optuna': ('pip:optuna', None),
+    'cryptography': ('apt:python3-cryptography', 'python3-cryptography'),
 }
 
 

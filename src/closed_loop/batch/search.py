@@ -281,7 +281,7 @@ def main(argv=None):
     print('search %s: at most %d episodes, %s sampler -> %s' % (search.name, search.budget, search.sampler, output),
           flush=True)
     try:
-        rows = run(search, output, args.scheduler, args.workers, args.resume)
+        rows = run(search, output, sweep.scheduler_of(args.scheduler, args.tls), args.workers, args.resume)
     except sweep_file.SweepError as error:
         print('search: %s' % error, file=sys.stderr)
         return 2

@@ -4,8 +4,8 @@
 The sweep file (``closed_loop.batch.sweep_file``) is checked whole before anything runs. The episodes
 (``closed_loop.batch.episode.run_episode``) then run on a Dask cluster: by default a local one started here,
 one single-threaded worker process per core, listening on 127.0.0.1 only; ``--scheduler
-tcp://HOST:PORT`` sends them to a cluster already running (``dask scheduler`` and ``dask worker``
-on machines that have this package installed). Each finished episode is one row of
+tcp://HOST:PORT`` (or ``tls://HOST:PORT --tls DIR``) sends them to a cluster already running (``dask scheduler``
+and ``dask worker`` on machines that have this package installed; ``closed_loop.batch.cluster``). Each finished episode is one row of
 ``OUTPUT/rows.csv`` at once, whole or not at all (the spec, as JSON and one column per grid key, and the
 result; ``closed_loop.batch.rows_file``), so an interrupted sweep keeps what it did, and ``--resume`` sets
 aside a row it left torn and runs only what is missing. An episode that
@@ -16,7 +16,6 @@ file's ``report:`` chooses, ``closed_loop.batch.pictures``). At the end: a summa
 or a node: ``closed_loop.batch.graph_episode``) keeps its files in ``OUTPUT/graphs/episode-INDEX``; when a
 local cluster closes, done or interrupted, the sweep waits for those graphs to be down.
 """
-import argparse
 import csv
 import dataclasses
 import json
@@ -29,6 +28,7 @@ import time
 
 from closed_loop import cli, launcher
 from closed_loop.batch import graph_keeper, pictures, rows_file, sweep_file, sweep_report
+from closed_loop.batch.cluster import add_arguments as add_cluster_arguments, client_for, scheduler_of
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 from closed_loop.batch.spec import benchmark_score
@@ -121,26 +121,6 @@ def read_rows(path):
         return []
     with open(path, newline='') as f:
         return list(csv.DictReader(f))
-
-
-def client_for(scheduler, workers):
-    if not quiet.verbose():
-        # Dask's own warnings (a worker "still alive after 4.0 seconds, killing" after Ctrl-C) are not the
-        # sweep's: only its errors are shown, here and (local_worker) in the local workers, as pybullet's output
-        # is (--verbose shows them).
-        logging.getLogger('distributed').setLevel(logging.ERROR)
-    import distributed
-    if scheduler:
-        return distributed.Client(scheduler, timeout='20s'), None
-    # The local workers are forked from one server process that has imported Dask (Dask's "forkserver" method),
-    # not each started afresh ("spawn", Dask's default): a worker then costs a fork, not Dask's imports again
-    # (docs/benchmarks.md).
-    import dask
-    dask.config.set({'distributed.worker.multiprocessing-method': 'forkserver',
-                     'distributed.worker.preload': ['closed_loop.batch.local_worker']})
-    cluster = distributed.LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                       processes=True, host='127.0.0.1', dashboard_address='127.0.0.1:0')
-    return distributed.Client(cluster), cluster
 
 
 def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.stderr):
@@ -311,16 +291,6 @@ def checking(done, total, stream=sys.stderr):
     stream.flush()
 
 
-def add_cluster_arguments(parser):
-    """The options every sweep command has: where it runs, and --resume."""
-    parser.add_argument('--scheduler', help='tcp://HOST:PORT of a running Dask scheduler (default: a local '
-                        'cluster of one worker process per core)')
-    parser.add_argument('--workers', type=int, help='local cluster size (default: the number of cores)')
-    parser.add_argument('--resume', action='store_true', help='go on with the rows already in --output')
-    parser.add_argument('--verbose', action='store_true', help="let pybullet's own output (its banner, its URDF "
-                        'importer warnings) through to the terminal')
-
-
 def run_command(prog, make, output, args, preface=None):
     """What a sweep command does: build the sweep (``make()``), run it into ``output`` (default
     sweeps/NAME) and report (``closed_loop.batch.sweep_report``; ``preface(rows)``: lines the page puts
@@ -331,7 +301,7 @@ def run_command(prog, make, output, args, preface=None):
         built = make()
         output = output or os.path.join('sweeps', built.name)
         print('%s %s: %d episodes -> %s' % (prog, built.name, len(built.specs), output), flush=True)
-        rows = run(built, output, args.scheduler, args.workers, args.resume)
+        rows = run(built, output, scheduler_of(args.scheduler, args.tls), args.workers, args.resume)
         sweep_report.report(built, rows, output, preface=preface(rows) if preface else ())
     except rows_file.NoRoom as error:
         print('%s: %s' % (prog, error), file=sys.stderr)
