@@ -159,7 +159,7 @@ def run_graph(spec, prepared, folder=None, bag=None):
         if folder is None:
             folder = tempfile.mkdtemp(prefix='episode-')
         else:
-            _set_aside(folder)
+            set_aside(folder)
             os.makedirs(folder)
         launch_file = os.path.join(folder, 'episode.launch')
         with open(launch_file, 'w') as f:
@@ -199,7 +199,7 @@ def graph_mark(folder):
     return os.path.join(os.path.abspath(folder), 'run-%d-%s' % (os.getpid(), uuid.uuid4().hex))
 
 
-def _set_aside(folder):
+def set_aside(folder):
     if os.path.lexists(folder):
         attempt = 1
         while os.path.lexists('%s.attempt-%d' % (folder, attempt)):

@@ -38,7 +38,7 @@ import sys
 import warnings
 
 from closed_loop import cli
-from closed_loop.batch import pictures, rows_file, sweep, sweep_file, sweep_report
+from closed_loop.batch import logs_back, pictures, rows_file, sweep, sweep_file, sweep_report
 from closed_loop.yaml_check import Checker, FileError, load_yaml, quote, read_text
 
 TOP_KEYS = ('name', 'base', 'space', 'budget', 'batch', 'seed', 'sampler', 'failure', 'report')
@@ -235,12 +235,15 @@ def run(search, output, scheduler=None, workers=None, resume=False, stream=sys.s
     writing = sweep.Writing(output, rows, traj, columns, search.budget - done, search.report)
     progress = sweep.Progress(search.budget, done, stream, 'search', 'failure')
     client, cluster = sweep.client_for(scheduler, workers)
+    logs_root = os.path.abspath(os.path.join(output, 'graphs'))
+    token = logs_back.claim(logs_root)
     try:
         while done < search.budget:
             trials = [study.ask(dists) for _ in range(min(search.batch, search.budget - done))]
             specs = [(done + n, dict(t.params), spec_of(search, t.params)) for n, t in enumerate(trials)]
-            futures = [client.submit(sweep.run_row, s.to_dict(), os.path.join(output, 'graphs', 'episode-%05d' % i),
-                                     writing.choice if writing.keep > 0 else 'none', pure=False) for i, _, s in specs]
+            futures = [client.submit(sweep.run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i),
+                                     writing.choice if writing.keep > 0 else 'none', token, pure=False)
+                       for i, _, s in specs]
             for trial, (i, assignment, spec), future in zip(trials, specs, futures):
                 result = future.result()
                 objective, failing = judged(search, result)

@@ -27,7 +27,8 @@ import itertools
 import time
 
 from closed_loop import cli, launcher
-from closed_loop.batch import graph_keeper, pictures, rows_file, sweep_file, sweep_report
+from closed_loop.batch import graph_keeper, logs_back, pictures, rows_file, sweep_file, sweep_report
+from closed_loop.batch.graph_episode import set_aside
 from closed_loop.batch.cluster import add_arguments as add_cluster_arguments, client_for, scheduler_of
 from closed_loop.sim import quiet
 from closed_loop.batch.episode import EpisodeSpec, run_episode
@@ -51,21 +52,29 @@ def row_key(spec):
     return json.dumps(spec.to_dict(), sort_keys=True)
 
 
-def run_row(spec_fields, logs=None, choice='none'):
+def run_row(spec_fields, logs=None, choice='none', token=None):
     """One episode on a worker: the result columns (never raises; an episode that did is outcome 'error').
-    A graph episode's files go into the folder ``logs``. ``choice``: which episodes get a picture
+    A graph episode's files go into the folder ``logs``, or, where this worker does not see the client's files
+    (``token``: ``closed_loop.batch.logs_back``), into a folder of its own that comes back packed with the row. ``choice``: which episodes get a picture
     (``report.pictures``): the picture is drawn here, from a trajectory kept only for it, and comes back as PNG
     bytes (``picture_png``); the trajectory comes back only if the spec asks for it (``keep_trajectory``)."""
+    local = None
     try:
         spec = EpisodeSpec.from_dict(spec_fields)
-        r = run_episode(dataclasses.replace(spec, keep_trajectory=True) if choice != 'none' else spec, _CACHE, logs)
+        if token is not None and logs and isinstance(spec.controller, dict) and \
+                not logs_back.shares(os.path.dirname(logs), token):
+            local = logs_back.local_folder()
+        r = run_episode(dataclasses.replace(spec, keep_trajectory=True) if choice != 'none' else spec, _CACHE,
+                        os.path.join(local, 'episode') if local else logs)
         row = {'outcome': r.outcome, 'mode': r.mode, 'time_s': r.time_s, 'contacts': r.contacts,
                'min_clearance_m': r.min_clearance_m, 'final_x': r.final_pose[0], 'final_y': r.final_pose[1],
                'final_yaw': r.final_pose[2], 'goal_error_m': r.goal_error_m, 'path_m': r.path_m,
                'peak_decel_mps2': r.peak_decel_mps2, 'missed_ticks': r.missed_ticks,
                'benchmark_time_s': _blank(r.benchmark_time_s), 'benchmark_score': _blank(benchmark_score(spec, r)),
                'wall_s': r.wall_s, 'error': r.error or '',
-               'why': r.why, 'logs': r.logs or ''}
+               'why': r.why, 'logs': (logs if local else r.logs) or ''}
+        if local:
+            logs_back.send_back(os.path.join(local, 'episode'), row)
         if spec.keep_trajectory:
             row['trajectory'] = r.trajectory
         if pictures.wanted(choice, r.outcome, r.contacts):
@@ -73,6 +82,16 @@ def run_row(spec_fields, logs=None, choice='none'):
         return row
     except Exception as error:      # recorded in its row; the sweep goes on
         return dict({c: '' for c in RESULT_COLUMNS}, outcome='error', error='%s: %s' % (type(error).__name__, error))
+    finally:
+        if local:
+            _remove_empty(local)
+
+
+def _remove_empty(folder):
+    try:
+        os.rmdir(folder)
+    except OSError:
+        pass
 
 
 class Progress:
@@ -186,6 +205,7 @@ class Writing:
 
     def write(self, i, assignment, spec, result):
         png = result.pop('picture_png', None)
+        logs_back.receive(result, result.get('logs'), set_aside)
         row = dict({k: _cell(v) for k, v in assignment.items()}, index=i, spec=row_key(spec),
                    **{c: result.get(c, '') for c in RESULT_COLUMNS})
         line = rows_file.csv_line(self.columns, row)
@@ -224,6 +244,7 @@ def _run_todo(todo, writing, progress, scheduler, workers):
     import distributed
     client, cluster = client_for(scheduler, workers)
     logs_root = os.path.abspath(os.path.join(writing.output, 'graphs'))
+    token = logs_back.claim(logs_root)
     window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
     pending = iter(todo)
     futures = {}
@@ -232,7 +253,7 @@ def _run_todo(todo, writing, progress, scheduler, workers):
     def submit(count):
         for i, a, s in itertools.islice(pending, count):
             wanted = writing.choice if writing.keep > 0 else 'none'
-            future = client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted,
+            future = client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted, token,
                                    key='episode-%d-%s' % (i, _digest(s)), pure=False)
             futures[future] = (i, a, s)
             running.add(future)
