@@ -18,7 +18,7 @@ APT_PACKAGES=(
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-sensor-msgs python3-nav-msgs
   python3-visualization-msgs python3-dynamic-reconfigure libdynamic-reconfigure-config-init-mutex-dev
   ros-std-msgs ros-std-srvs ros-geometry-msgs ros-sensor-msgs ros-nav-msgs ros-visualization-msgs ros-tf2-msgs
-  librostest-dev rosout rosbash ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
+  librostest-dev rosout rosbash rospack-tools ros-robot-state-publisher rviz xvfb x11-apps cmake g++ make
   libroscpp-dev libgeometry-msgs-dev libsensor-msgs-dev libnav-msgs-dev
   chromium util-linux mount hostname coreutils iproute2 procps git openssl
 )

@@ -38,7 +38,7 @@ import sys
 import warnings
 
 from closed_loop import cli
-from closed_loop.batch import logs_back, pictures, rows_file, sweep, sweep_file, sweep_report
+from closed_loop.batch import logs_back, pictures, rows_file, sweep, sweep_file, sweep_report, worker_check
 from closed_loop.yaml_check import Checker, FileError, load_yaml, quote, read_text
 
 TOP_KEYS = ('name', 'base', 'space', 'budget', 'batch', 'seed', 'sampler', 'failure', 'report')
@@ -238,14 +238,16 @@ def run(search, output, scheduler=None, workers=None, resume=False, stream=sys.s
     logs_root = os.path.abspath(os.path.join(output, 'graphs'))
     token = logs_back.claim(logs_root)
     try:
+        expected = worker_check.expected(client, cluster, _corners(search))
         while done < search.budget:
             trials = [study.ask(dists) for _ in range(min(search.batch, search.budget - done))]
             specs = [(done + n, dict(t.params), spec_of(search, t.params)) for n, t in enumerate(trials)]
-            futures = [client.submit(sweep.run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i),
-                                     writing.choice if writing.keep > 0 else 'none', token, pure=False)
-                       for i, _, s in specs]
-            for trial, (i, assignment, spec), future in zip(trials, specs, futures):
-                result = future.result()
+            args = [(s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i),
+                     writing.choice if writing.keep > 0 else 'none', token, expected) for i, _, s in specs]
+            futures = [client.submit(sweep.run_row, *a, pure=False) for a in args]
+            for trial, (i, assignment, spec), future, a in zip(trials, specs, futures, args):
+                result = worker_check.right_result(client, future, lambda: client.submit(sweep.run_row, *a, pure=False),
+                                                   progress.stream)
                 objective, failing = judged(search, result)
                 study.tell(trial, objective)
                 if not failing:
@@ -259,6 +261,14 @@ def run(search, output, scheduler=None, workers=None, resume=False, stream=sys.s
         if cluster is not None:
             cluster.close()
     return sweep.read_rows(rows_path)
+
+
+def _corners(search):
+    """Episodes of ``search`` at its space's first values, one for each controller it may choose (what a worker is
+    checked for)."""
+    first = {k: d[1][0] if d[0] == 'choice' else d[1] for k, d in search.space.items()}
+    controllers = search.space['controller'][1] if search.space.get('controller', ('',))[0] == 'choice' else [None]
+    return [spec_of(search, dict(first, **({'controller': c} if c is not None else {}))) for c in controllers]
 
 
 def _typed(dim, text):

@@ -27,7 +27,7 @@ import itertools
 import time
 
 from closed_loop import cli, launcher
-from closed_loop.batch import graph_keeper, logs_back, pictures, rows_file, sweep_file, sweep_report
+from closed_loop.batch import graph_keeper, logs_back, pictures, rows_file, sweep_file, sweep_report, worker_check
 from closed_loop.batch.graph_episode import set_aside
 from closed_loop.batch.cluster import add_arguments as add_cluster_arguments, client_for, scheduler_of
 from closed_loop.sim import quiet
@@ -52,13 +52,19 @@ def row_key(spec):
     return json.dumps(spec.to_dict(), sort_keys=True)
 
 
-def run_row(spec_fields, logs=None, choice='none', token=None):
+def run_row(spec_fields, logs=None, choice='none', token=None, expected=None):
     """One episode on a worker: the result columns (never raises; an episode that did is outcome 'error').
     A graph episode's files go into the folder ``logs``, or, where this worker does not see the client's files
-    (``token``: ``closed_loop.batch.logs_back``), into a folder of its own that comes back packed with the row. ``choice``: which episodes get a picture
-    (``report.pictures``): the picture is drawn here, from a trajectory kept only for it, and comes back as PNG
-    bytes (``picture_png``); the trajectory comes back only if the spec asks for it (``keep_trajectory``)."""
+    (``token``: ``closed_loop.batch.logs_back``), into a folder of its own that comes back packed with the row.
+    ``expected``: the client's fingerprint; a worker that differs runs nothing (``closed_loop.batch.worker_check``).
+    ``choice``: which episodes get a picture (``report.pictures``): the picture is drawn here, from a trajectory
+    kept only for it, and comes back as PNG bytes (``picture_png``); the trajectory comes back only if the spec
+    asks for it (``keep_trajectory``)."""
     local = None
+    wrong = worker_check.matches(expected)
+    if wrong:
+        import distributed
+        return {'wrong_worker': wrong, 'worker': distributed.get_worker().address}
     try:
         spec = EpisodeSpec.from_dict(spec_fields)
         if token is not None and logs and isinstance(spec.controller, dict) and \
@@ -246,22 +252,26 @@ def _run_todo(todo, writing, progress, scheduler, workers):
     logs_root = os.path.abspath(os.path.join(writing.output, 'graphs'))
     token = logs_back.claim(logs_root)
     window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
-    pending = iter(todo)
+    first = list(itertools.islice(todo, window))
+    pending = itertools.chain(first, todo)
     futures = {}
     running = distributed.as_completed()
+    expected = []
 
     def submit(count):
         for i, a, s in itertools.islice(pending, count):
             wanted = writing.choice if writing.keep > 0 else 'none'
-            future = client.submit(run_row, s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted, token,
-                                   key='episode-%d-%s' % (i, _digest(s)), pure=False)
-            futures[future] = (i, a, s)
+            args = (s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted, token, expected[0])
+            future = client.submit(run_row, *args, key='episode-%d-%s' % (i, _digest(s)), pure=False)
+            futures[future] = (i, a, s, args)
             running.add(future)
     try:
+        expected.append(worker_check.expected(client, cluster, [s for _, _, s in first]))
         submit(window)
         for future in running:
-            i, assignment, spec = futures.pop(future)
-            result = future.result()
+            i, assignment, spec, args = futures.pop(future)
+            result = worker_check.right_result(client, future, lambda: client.submit(run_row, *args, pure=False),
+                                               progress.stream)
             writing.write(i, assignment, spec, result)
             progress.update(result['outcome'])
             submit(1)

@@ -1,0 +1,30 @@
+"""What a worker is checked for (closed_loop.batch.worker_check): this package's version and source, the packages
+that decide an episode, and the ROS packages a sweep's launch files come from; what differs, named."""
+from closed_loop.batch import worker_check
+from closed_loop.batch.episode import EpisodeSpec
+
+
+def test_the_fingerprint_names_the_source_the_deciding_versions_and_the_packages_found():
+    mine = worker_check.fingerprint(['closed_loop', 'no_such_package_here'])
+    assert mine['closed_loop'].startswith('0.') and '(source ' in mine['closed_loop']
+    assert set(worker_check.DECIDING) <= set(mine) and all(mine[k] != 'none' for k in worker_check.DECIDING)
+    assert mine['ROS package closed_loop'] == 'found' and mine['ROS package no_such_package_here'] == 'not found'
+    assert worker_check.fingerprint() == {k: v for k, v in mine.items() if not k.startswith('ROS package')}
+
+
+def test_a_worker_that_differs_is_told_what_and_one_that_does_not_runs():
+    mine = worker_check.fingerprint()
+    assert worker_check.matches(None) is None and worker_check.matches(mine) is None
+    other = dict(mine, numba='0.1.0', closed_loop='0.1.0 (source 000000000000)')
+    said = worker_check.matches(other)
+    assert 'numba %s where this client has 0.1.0' % mine['numba'] in said
+    assert 'closed_loop %s where this client has 0.1.0 (source 000000000000)' % mine['closed_loop'] in said
+    needs = dict(mine, **{'ROS package no_such_package_here': 'found'})
+    assert worker_check.matches(needs) == 'ROS package no_such_package_here not found where this client has found'
+
+
+def test_the_packages_a_sweep_needs_are_those_its_launch_files_name():
+    specs = [EpisodeSpec(controller={'launch': 'my_pkg/launch/a.launch'}), EpisodeSpec(controller='stop_on_obstacle'),
+             EpisodeSpec(controller={'node': 'avoid_obstacles'}), EpisodeSpec(controller={'launch': '/abs/b.launch'}),
+             EpisodeSpec(controller={'launch': 'other_pkg/b.launch'})]
+    assert worker_check.graph_packages(specs) == ('my_pkg', 'other_pkg')
