@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Seeing failures, and what it costs: one episode's picture (a navigator in a generated cluttered world), a
-sweep's report.html for 10,000 rows, and sweeps of 1,000 and 10,000 episodes that all fail (0.2 s in an empty
+sweep's report.html for 10,000 rows, and sweeps of 1,000, 10,000 and 100,000 episodes that all fail (0.2 s in an empty
 world: every one times out) on a local cluster of 2 workers with the default report (100 pictures): wall
 time, pictures written, trajectories sent back, and the sweep process's own peak memory.
 
-Run: ``python3 test/bench/bench_report.py`` inside ``source env.sh`` (``make bench`` does that).
+Run: ``python3 test/bench/bench_report.py [COUNT ...]`` inside ``source env.sh`` (``make bench`` does that, with
+none: everything; the sweep of 100,000 takes about half an hour on 2 cores).
 Figures, not pass/fail: the exit status is non-zero only when something could not run.
 """
 import json
@@ -23,6 +24,8 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 from closed_loop.batch import pictures, report_page  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
 
+#: The sweeps whose client is measured: its memory and its time an episode should stay flat.
+COUNTS = (1000, 10000, 100000)
 LARGE = textwrap.dedent("""\
     import io, json, os, resource, sys, time
     from closed_loop.batch import sweep, sweep_file
@@ -72,7 +75,7 @@ def large(count):
         with open(script, 'w') as f:
             f.write(LARGE)
         done = subprocess.run([sys.executable, script, str(count), os.path.join(out, 'sweep')], stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, universal_newlines=True, timeout=560)
+                              stderr=subprocess.STDOUT, universal_newlines=True, timeout=60 + 0.1 * count)
         if done.returncode != 0:
             print(done.stdout[-3000:])
             raise SystemExit(1)
@@ -84,12 +87,20 @@ def large(count):
     return figures
 
 
-def main():
-    picture_cost()
-    page_cost()
-    small, big = large(1000), large(10000)
-    print('peak memory of the sweep process: %.0f MB at 1,000 episodes, %.0f MB at 10,000 (%.2fx for 10x the '
-          'episodes)' % (small['peak_mb'], big['peak_mb'], big['peak_mb'] / small['peak_mb']))
+def main(argv=None):
+    """Everything, or (with counts given) only the sweeps of those many episodes."""
+    counts = [int(a) for a in (sys.argv[1:] if argv is None else argv)]
+    if not counts:
+        picture_cost()
+        page_cost()
+    figures = [large(count) for count in counts or COUNTS]
+    first = figures[0]
+    for f in figures[1:]:
+        print('the sweep process at %d episodes against %d: peak memory %.0f MB against %.0f MB (%.2fx), %.2f ms of '
+              'wall time an episode against %.2f ms (%.2fx)'
+              % (f['rows'], first['rows'], f['peak_mb'], first['peak_mb'], f['peak_mb'] / first['peak_mb'],
+                 1e3 * f['wall_s'] / f['rows'], 1e3 * first['wall_s'] / first['rows'],
+                 (f['wall_s'] / f['rows']) / (first['wall_s'] / first['rows'])))
     return 0
 
 

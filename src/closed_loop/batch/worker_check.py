@@ -3,8 +3,8 @@ their outcome as the client has it.
 
 What is compared (``fingerprint``): this package (its version and a digest of its Python source, so that two
 checkouts of one version with different code differ), the pinned versions of the packages that decide an
-episode's outcome (``DECIDING``: pybullet, numpy, numba), and, for graph episodes, whether each ROS package the
-sweep's launch files come from is found. Before the first episode every worker is asked (``check_all``): a
+episode's outcome (``DECIDING``: pybullet, numpy, numba), and, for graph episodes, whether each launch file the
+sweep names in a package is found there (by rospack, as the worker's roslaunch will find it). Before the first episode every worker is asked (``check_all``): a
 mismatch is refused in one line naming the worker and what differs. Each episode carries the client's
 fingerprint too (``matches``), so that a worker that joined later and differs runs nothing: its row comes back
 as ``wrong_worker``, the client retires that worker and runs the episode elsewhere, and no row of another
@@ -19,6 +19,7 @@ from closed_loop.batch.sweep_file import SweepError
 
 DECIDING = ('pybullet', 'numpy', 'numba')
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+LAUNCH = 'launch file '
 
 
 class WrongWorker(SweepError):
@@ -53,28 +54,39 @@ def _own():
     return (('closed_loop', '%s (source %s)' % (version, digest.hexdigest()[:12])),) + tuple(sorted(found.items()))
 
 
-def fingerprint(packages=()):
-    """{what: this process's} for this package, the deciding packages and each ROS package of ``packages``
-    (found or not)."""
+def fingerprint(launches=()):
+    """{what: this process's} for this package, the deciding packages and each launch file of ``launches``
+    (``PKG/path/in/it.launch``: found, or not and why)."""
     found = dict(_own())
-    for name in sorted(packages):
-        # (rospack, as this worker's roslaunch will find it; a name is a package's, never a shell's.)
-        try:
-            there = subprocess.run(['rospack', 'find', name], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                   timeout=30).returncode == 0
-        except (OSError, subprocess.TimeoutExpired):
-            there = False
-        found['ROS package ' + name] = 'found' if there else 'not found'
+    places = {}
+    for launch in sorted(launches):
+        package, _, rest = launch.partition('/')
+        if package not in places:
+            places[package] = _package_path(package)
+        place = places[package]
+        found[LAUNCH + launch] = ('not found (no package %s)' % package if place is None else
+                                  'found' if os.path.isfile(os.path.join(place, rest)) else 'not found')
     return found
 
 
-def graph_packages(specs):
-    """The ROS packages the graph controllers of ``specs`` (EpisodeSpecs) name by their launch files."""
+def _package_path(name):
+    """Where this worker's ROS finds package ``name`` (rospack, as its roslaunch will), or None."""
+    try:
+        done = subprocess.run(['rospack', 'find', name], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                              universal_newlines=True, timeout=30)
+    except (OSError, subprocess.TimeoutExpired):
+        return None
+    return done.stdout.strip() if done.returncode == 0 and done.stdout.strip() else None
+
+
+def graph_launches(specs):
+    """The launch files (``PKG/path``) the graph controllers of ``specs`` (EpisodeSpecs) name in a package (not by
+    an absolute path, nor from a workspace of their own)."""
     names = set()
     for spec in specs:
         launch = spec.controller.get('launch') if isinstance(spec.controller, dict) else None
         if launch and not os.path.isabs(launch) and not spec.controller.get('workspace'):
-            names.add(launch.split('/', 1)[0])
+            names.add(launch)
     return tuple(sorted(names))
 
 
@@ -88,16 +100,14 @@ def matches(expected):
     """None where this worker has ``expected`` (the client's fingerprint), else what differs (one line)."""
     if expected is None:
         return None
-    packages = [k.split(' ', 2)[2] for k in expected if k.startswith('ROS package ')]
-    found = differences(expected, fingerprint(packages))
+    found = differences(expected, fingerprint([k[len(LAUNCH):] for k in expected if k.startswith(LAUNCH)]))
     return '; '.join(found) or None
 
 
 def check_all(client, expected):
     """Every worker of ``client`` asked before the first episode; raises WrongWorker naming the first that
     differs."""
-    packages = [k.split(' ', 2)[2] for k in expected if k.startswith('ROS package ')]
-    answers = client.run(fingerprint, packages)
+    answers = client.run(fingerprint, [k[len(LAUNCH):] for k in expected if k.startswith(LAUNCH)])
     names = {addr: info.get('name') for addr, info in client.scheduler_info()['workers'].items()}
     for address in sorted(answers):
         found = differences(expected, answers[address])
@@ -109,14 +119,14 @@ def check_all(client, expected):
 
 
 def expected(client, cluster, specs):
-    """The client's fingerprint for ``specs`` (EpisodeSpecs, for the ROS packages they need), every worker of a
+    """The client's fingerprint for ``specs`` (EpisodeSpecs, for the launch files they need), every worker of a
     cluster of the user's checked against it first (raises WrongWorker); what each episode then carries (the
     versions). None for a local cluster: its workers are this client's own processes."""
     if cluster is not None:
         return None
-    mine = fingerprint(graph_packages(specs))
+    mine = fingerprint(graph_launches(specs))
     check_all(client, mine)
-    return {k: v for k, v in mine.items() if not k.startswith('ROS package ')}
+    return {k: v for k, v in mine.items() if not k.startswith(LAUNCH)}
 
 
 def right_result(client, future, resubmit, stream):
