@@ -244,3 +244,49 @@ def same_rows(rows, again, columns=('outcome', 'time_s', 'final_x', 'final_y', '
     """The rows of two runs of one sweep that differ in ``columns``, by index: [] when every row is the same."""
     return [(index, {c: (row[c], again[index][c]) for c in columns if row[c] != again[index][c]})
             for index, row in sorted(rows.items()) if any(row[c] != again[index][c] for c in columns)]
+
+
+class HandCluster:
+    """A Dask cluster started by hand as a user starts one: ``dask scheduler`` on 127.0.0.1 (with TLS where
+    ``certs`` names a folder that ``closed_loop.batch.certificates`` wrote), and ``worker()``s added at will, their
+    output in ``log_path``. ``with HandCluster(...) as cluster:`` ends every process it started."""
+
+    def __init__(self, log_path, certs=None):
+        self.dask = os.path.join(os.path.dirname(sys.executable), 'dask')
+        self.certs, self.log_path = certs, log_path
+        port = free_port()
+        self.address = '%s://127.0.0.1:%d' % ('tls' if certs else 'tcp', port)
+        self.log = open(str(log_path), 'w')
+        self.procs = []
+        self._start([self.dask, 'scheduler', '--host', '127.0.0.1', '--port', str(port), '--no-dashboard']
+                    + (['--protocol', 'tls'] + self.tls('scheduler') if certs else []))
+
+    def tls(self, role):
+        return ['--tls-ca-file', os.path.join(str(self.certs), 'ca.pem'),
+                '--tls-cert', os.path.join(str(self.certs), role + '.pem'),
+                '--tls-key', os.path.join(str(self.certs), role + '.key')] if self.certs else []
+
+    def worker(self, name, env=None, prefix=()):
+        """A one-thread worker named ``name``, with ``env`` (default: this process's), its command after
+        ``prefix`` (a namespace of its own, say)."""
+        return self._start(list(prefix) + [self.dask, 'worker', self.address, '--nworkers', '1', '--nthreads', '1',
+                                           '--host', '127.0.0.1', '--no-dashboard', '--name', name]
+                           + self.tls('worker'), env)
+
+    def _start(self, argv, env=None):
+        process = subprocess.Popen(argv, env=env, stdout=self.log, stderr=self.log)
+        self.procs.append(process)
+        return process
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *_):
+        for p in reversed(self.procs):
+            p.terminate()
+        for p in self.procs:
+            try:
+                p.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                p.kill()
+        self.log.close()

@@ -3,13 +3,11 @@ TLS and the certificates `rosrun closed_loop certificates` writes (mutual authen
 owner's sweep runs (--scheduler tls://... --tls DIR); a client whose certificate another CA signed, and one that
 speaks plain tcp:// to the scheduler, are refused in one line each, and neither runs anything there."""
 import os
-import subprocess
-import sys
 
 import pytest
 
 from closed_loop.batch import certificates, cluster, sweep
-from conftest import free_port
+from conftest import HandCluster
 
 TINY = """name: tiny
 base: {world: wall, controller: stop_on_obstacle, time_limit_s: 8}
@@ -26,30 +24,9 @@ def tls_cluster(tmp_path_factory):
     mine, theirs = root / 'mine', root / 'theirs'
     certificates.make(str(mine))
     certificates.make(str(theirs))
-    dask = os.path.join(os.path.dirname(sys.executable), 'dask')
-    port = free_port()
-    address = 'tls://127.0.0.1:%d' % port
-    log_path = root / 'dask.log'
-    logs = open(str(log_path), 'w')
-
-    def tls(role):
-        return ['--tls-ca-file', str(mine / 'ca.pem'), '--tls-cert', str(mine / (role + '.pem')),
-                '--tls-key', str(mine / (role + '.key'))]
-    procs = [subprocess.Popen([dask, 'scheduler', '--protocol', 'tls', '--host', '127.0.0.1', '--port', str(port),
-                               '--no-dashboard'] + tls('scheduler'), stdout=logs, stderr=logs)]
-    try:
-        procs.append(subprocess.Popen([dask, 'worker', address, '--nworkers', '1', '--nthreads', '1', '--host',
-                                       '127.0.0.1', '--no-dashboard'] + tls('worker'), stdout=logs, stderr=logs))
-        yield address, mine, theirs, log_path
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                p.kill()
-        logs.close()
+    with HandCluster(root / 'dask.log', certs=mine) as hand:
+        hand.worker('w0')
+        yield hand.address, mine, theirs, hand.log_path
 
 
 def test_the_owners_sweep_runs_over_tls(tmp_path, tls_cluster, capsys):

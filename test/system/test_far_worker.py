@@ -6,13 +6,11 @@ of it."""
 import csv
 import json
 import os
-import subprocess
-import sys
 
 import pytest
 
 from closed_loop.batch import sweep
-from conftest import free_port, graph_leftovers
+from conftest import HandCluster, graph_leftovers
 
 SPEC = """name: far
 base: {world: wall, time_limit_s: 15}
@@ -25,30 +23,14 @@ report: {pictures: all}
 @pytest.fixture
 def far_cluster(tmp_path):
     """(scheduler address, the client's folder the worker cannot see, the worker's temporary folder)."""
-    dask = os.path.join(os.path.dirname(sys.executable), 'dask')
     hidden, worker_tmp = tmp_path / 'client', tmp_path / 'worker_tmp'
     hidden.mkdir()
     worker_tmp.mkdir()
-    port = free_port()
-    address = 'tcp://127.0.0.1:%d' % port
-    logs = open(str(tmp_path / 'dask.log'), 'w')
-    procs = [subprocess.Popen([dask, 'scheduler', '--host', '127.0.0.1', '--port', str(port), '--no-dashboard'],
-                              stdout=logs, stderr=logs)]
-    try:
-        procs.append(subprocess.Popen(
-            ['unshare', '--mount', '--propagation', 'private', 'sh', '-c', 'mount -t tmpfs tmpfs "$0" && exec "$@"',
-             str(hidden), dask, 'worker', address, '--nworkers', '1', '--nthreads', '1', '--host', '127.0.0.1',
-             '--no-dashboard'], env=dict(os.environ, TMPDIR=str(worker_tmp)), stdout=logs, stderr=logs))
-        yield address, hidden, worker_tmp
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                p.kill()
-        logs.close()
+    with HandCluster(tmp_path / 'dask.log') as cluster:
+        cluster.worker('far', env=dict(os.environ, TMPDIR=str(worker_tmp)),
+                       prefix=['unshare', '--mount', '--propagation', 'private', 'sh', '-c',
+                               'mount -t tmpfs tmpfs "$0" && exec "$@"', str(hidden)])
+        yield cluster.address, hidden, worker_tmp
 
 
 def test_everything_a_row_points_to_comes_back_and_the_worker_keeps_nothing(far_cluster, capsys):

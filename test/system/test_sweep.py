@@ -11,7 +11,7 @@ import time
 import pytest
 
 import machine
-from conftest import ROOT, free_port
+from conftest import ROOT, HandCluster
 
 from closed_loop.batch import sweep, sweep_file, sweep_report, tune_thresholds
 from closed_loop.batch.episode import EpisodeSpec
@@ -88,27 +88,11 @@ def test_an_episode_that_fails_is_a_row_with_its_error_and_the_sweep_goes_on(tmp
 @pytest.fixture(scope='module')
 def hand_cluster(tmp_path_factory):
     """``dask scheduler`` and two ``dask worker`` processes on 127.0.0.1, started by hand: (address, its log)."""
-    dask = os.path.join(os.path.dirname(sys.executable), 'dask')
-    port = free_port()
-    address = 'tcp://127.0.0.1:%d' % port
     log_path = tmp_path_factory.mktemp('dask') / 'dask.log'
-    logs = open(log_path, 'w')
-    procs = [subprocess.Popen([dask, 'scheduler', '--host', '127.0.0.1', '--port', str(port),
-                               '--no-dashboard'], stdout=logs, stderr=logs)]
-    try:
-        procs += [subprocess.Popen([dask, 'worker', address, '--nworkers', '1', '--nthreads', '1', '--host',
-                                    '127.0.0.1', '--no-dashboard', '--name', 'w%d' % i],
-                                   stdout=logs, stderr=logs) for i in range(2)]
-        yield address, log_path
-    finally:
-        for p in reversed(procs):
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                p.kill()
-        logs.close()
+    with HandCluster(log_path) as cluster:
+        for i in range(2):
+            cluster.worker('w%d' % i)
+        yield cluster.address, log_path
 
 
 def test_a_sweep_runs_on_a_dask_scheduler_and_workers_started_by_hand(tmp_path, hand_cluster):

@@ -11,7 +11,7 @@ import time
 import pytest
 
 from closed_loop.batch import sweep
-from conftest import ROOT, free_port, wait_for
+from conftest import ROOT, HandCluster, wait_for
 
 QUICK = """name: quick
 base: {world: wall, controller: stop_on_obstacle, time_limit_s: 6}
@@ -31,43 +31,18 @@ def other_source(root):
     return str(copy)
 
 
-class Cluster:
-    def __init__(self, root):
-        self.dask = os.path.join(os.path.dirname(sys.executable), 'dask')
-        self.port = free_port()
-        self.address = 'tcp://127.0.0.1:%d' % self.port
-        self.log = open(str(root / 'dask.log'), 'w')
-        self.procs = [subprocess.Popen([self.dask, 'scheduler', '--host', '127.0.0.1', '--port', str(self.port),
-                                        '--no-dashboard'], stdout=self.log, stderr=self.log)]
-
-    def worker(self, name, pythonpath=None):
-        env = dict(os.environ)
-        if pythonpath:
-            env['PYTHONPATH'] = os.pathsep.join([pythonpath, env.get('PYTHONPATH', '')])
-        process = subprocess.Popen([self.dask, 'worker', self.address, '--nworkers', '1', '--nthreads', '1', '--host',
-                                    '127.0.0.1', '--no-dashboard', '--name', name], env=env, stdout=self.log,
-                                   stderr=self.log)
-        self.procs.append(process)
-        return process
-
-    def close(self):
-        for p in reversed(self.procs):
-            p.terminate()
-        for p in self.procs:
-            try:
-                p.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                p.kill()
-        self.log.close()
-
-
 @pytest.fixture
 def cluster(tmp_path):
-    made = Cluster(tmp_path)
-    try:
-        yield made
-    finally:
-        made.close()
+    with HandCluster(tmp_path / 'dask.log') as hand:
+        yield hand
+
+
+def worker(cluster, name, pythonpath=None):
+    """A worker named ``name``; ``pythonpath``: a folder put first on its PYTHONPATH."""
+    env = dict(os.environ)
+    if pythonpath:
+        env['PYTHONPATH'] = os.pathsep.join([pythonpath, env.get('PYTHONPATH', '')])
+    return cluster.worker(name, env=env)
 
 
 def registered(address, count):
@@ -77,8 +52,8 @@ def registered(address, count):
 
 
 def test_a_worker_of_another_version_is_refused_before_the_first_episode(tmp_path, cluster, capsys):
-    cluster.worker('same')
-    cluster.worker('other', other_source(tmp_path))
+    worker(cluster, 'same')
+    worker(cluster, 'other', other_source(tmp_path))
     registered(cluster.address, 2)
     spec = tmp_path / 'quick.yaml'
     spec.write_text(QUICK)
@@ -91,7 +66,7 @@ def test_a_worker_of_another_version_is_refused_before_the_first_episode(tmp_pat
 
 
 def test_a_worker_of_another_version_that_joins_is_retired_and_runs_nothing(tmp_path, cluster):
-    cluster.worker('same')
+    worker(cluster, 'same')
     registered(cluster.address, 1)
     spec = tmp_path / 'quick.yaml'
     spec.write_text(QUICK)
@@ -102,7 +77,7 @@ def test_a_worker_of_another_version_that_joins_is_retired_and_runs_nothing(tmp_
     try:
         wait_for(lambda: os.path.exists(str(out / 'rows.csv')) and open(str(out / 'rows.csv')).read().count('\n') > 2,
                  120, 'the sweep under way')
-        other = cluster.worker('other', other_source(tmp_path))
+        other = worker(cluster, 'other', other_source(tmp_path))
         text, _ = run.communicate(timeout=300)
     finally:
         if run.poll() is None:
