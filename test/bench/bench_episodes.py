@@ -102,7 +102,7 @@ def main():
     alone_s = time.monotonic() - started
     with tempfile.TemporaryDirectory() as out:
         started = time.monotonic()
-        rows = sweep.run(built, out, workers=args.workers, stream=open(os.devnull, 'w'))
+        rows = list(sweep.run(built, out, workers=args.workers, stream=open(os.devnull, 'w')))
         cluster_s = time.monotonic() - started
     print('3. sweep throughput, %d episodes (stop_on_obstacle, wall and red_box, 20 s limit)' % n)
     print('   one by one in this process: %.0f episodes/min (%.1f s); local cluster of %d workers: %.0f episodes/min '
@@ -117,7 +117,7 @@ def main():
                                        list(range(seeds)), [0.0, 0.01], 20.0, name='long')
     with tempfile.TemporaryDirectory() as out:
         started = time.monotonic()
-        rows = sweep.run(long_sweep, out, workers=args.workers, stream=open(os.devnull, 'w'))
+        rows = list(sweep.run(long_sweep, out, workers=args.workers, stream=open(os.devnull, 'w')))
         wall_s = time.monotonic() - started
     errors = sum(r['outcome'] == 'error' for r in rows)
     contacts = sum(r['outcome'] != 'error' and int(r['contacts']) > 0 for r in rows)

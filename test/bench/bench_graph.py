@@ -119,7 +119,7 @@ def repeated(name, base, out, load):
     built = sweep_file.build('bench_graph', base, {'seed': list(range(REPEATS))}, report={'pictures': 'none',
                                                                                           'max_pictures': 0})
     with busy(load):
-        rows = sweep.run(built, out, workers=2, stream=open(os.devnull, 'w'))
+        rows = list(sweep.run(built, out, workers=2, stream=open(os.devnull, 'w')))
     errors = [r['error'] for r in rows if r['outcome'] == 'error']
     if errors:
         raise SystemExit('bench_graph: %s did not run: %s' % (name, errors[0]))

@@ -33,7 +33,7 @@ def run(controller, workers, **base):
                              report={'pictures': 'none', 'max_pictures': 0})
     with tempfile.TemporaryDirectory() as out:
         started = time.monotonic()
-        rows = sweep.run(built, out, workers=workers, stream=open(os.devnull, 'w'))
+        rows = list(sweep.run(built, out, workers=workers, stream=open(os.devnull, 'w')))
         wall = time.monotonic() - started
         left = launcher.marked_processes(out)
     return rows, wall, left

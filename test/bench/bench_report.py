@@ -2,7 +2,8 @@
 """Seeing failures, and what it costs: one episode's picture (a navigator in a generated cluttered world), a
 sweep's report.html for 10,000 rows, and sweeps of 1,000, 10,000 and 100,000 episodes that all fail (0.2 s in an empty
 world: every one times out) on a local cluster of 2 workers with the default report (100 pictures): wall
-time, pictures written, trajectories sent back, and the sweep process's own peak memory.
+time, pictures written, trajectories sent back, and the sweep process's own peak memory, for the whole command: the
+episodes, then the report (summary, plot and page, from one pass over rows.csv).
 
 Run: ``python3 test/bench/bench_report.py [COUNT ...]`` inside ``source env.sh`` (``make bench`` does that, with
 none: everything; the sweep of 100,000 takes about half an hour on 2 cores).
@@ -14,7 +15,6 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import textwrap
 import time
 import types
 
@@ -23,24 +23,10 @@ sys.path.insert(0, os.path.join(ROOT, 'src'))
 
 from closed_loop.batch import pictures, report_page  # noqa: E402
 from closed_loop.batch.episode import EpisodeSpec, run_episode  # noqa: E402
+from closed_loop.batch.tally import Tally  # noqa: E402
 
 #: The sweeps whose client is measured: its memory and its time an episode should stay flat.
 COUNTS = (1000, 10000, 100000)
-LARGE = textwrap.dedent("""\
-    import io, json, os, resource, sys, time
-    from closed_loop.batch import sweep, sweep_file
-    if __name__ == '__main__':
-        built = sweep_file.build('large', {'world': 'empty', 'time_limit_s': 0.2},
-                                 {'seed': {'from': 0, 'to': int(sys.argv[1]) - 1, 'step': 1}})
-        started = time.monotonic()
-        rows = sweep.run(built, sys.argv[2], workers=2, stream=io.StringIO())
-        print(json.dumps({'rows': len(rows), 'wall_s': time.monotonic() - started,
-                          'pictures': len(os.listdir(os.path.join(sys.argv[2], 'pictures'))),
-                          'trajectory_bytes': os.path.getsize(os.path.join(sys.argv[2], 'trajectories.jsonl')),
-                          'peak_mb': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}))
-    """)
-
-
 def picture_cost():
     spec = EpisodeSpec(world={'generator': {'seed': 5, 'fill_ratio': 0.5}}, robot='jackal', controller='avoid_obstacles',
                        time_limit_s=40.0, keep_trajectory=True)
@@ -63,7 +49,8 @@ def page_cost():
             open(os.path.join(out, 'pictures', 'episode-%05d.png' % i), 'wb').close()
         sweep = types.SimpleNamespace(name='page', keys=['seed'], report={'pictures': 'failures'}, text='name: page')
         started = time.process_time()
-        report_page.write(os.path.join(out, 'report.html'), sweep, rows, ['episodes'], [['10000']], None,
+        tally = Tally.of(rows, sweep.keys, pictured=range(1, 300, 3))
+        report_page.write(os.path.join(out, 'report.html'), sweep, tally, ['episodes'], [['10000']], None,
                           lambda i: os.path.join(out, 'pictures', 'episode-%05d.png' % int(i)))
         print('report.html of 10,000 rows (6,667 not as meant, 1,000 listed, 100 pictures): %.0f ms CPU, %.0f kB'
               % (1000 * (time.process_time() - started), os.path.getsize(os.path.join(out, 'report.html')) / 1024.0))
@@ -71,19 +58,17 @@ def page_cost():
 
 def large(count):
     with tempfile.TemporaryDirectory() as out:
-        script = os.path.join(out, 'large.py')
-        with open(script, 'w') as f:
-            f.write(LARGE)
-        done = subprocess.run([sys.executable, script, str(count), os.path.join(out, 'sweep')], stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, universal_newlines=True, timeout=60 + 0.1 * count)
+        done = subprocess.run([sys.executable, os.path.join(ROOT, 'test', 'bench', 'large_sweep.py'), str(count),
+                               os.path.join(out, 'sweep')], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                              universal_newlines=True, timeout=60 + 0.1 * count)
         if done.returncode != 0:
             print(done.stdout[-3000:])
             raise SystemExit(1)
         figures = json.loads(done.stdout.strip().splitlines()[-1])
-    print('sweep of %d failing episodes, 2 workers: %.0f s (%.0f a minute), %d pictures, %d bytes of trajectories '
-          'sent back, sweep process peak %.0f MB' % (figures['rows'], figures['wall_s'],
-                                                     60.0 * figures['rows'] / figures['wall_s'], figures['pictures'],
-                                                     figures['trajectory_bytes'], figures['peak_mb']))
+    print('the sweep command on %d failing episodes, 2 workers, its report included: %.0f s (%.0f a minute), %d '
+          'pictures, %d bytes of trajectories sent back, report.html %.0f kB, sweep process peak %.0f MB'
+          % (figures['rows'], figures['wall_s'], 60.0 * figures['rows'] / figures['wall_s'], figures['pictures'],
+             figures['trajectory_bytes'], figures['page_bytes'] / 1024.0, figures['peak_mb']))
     return figures
 
 

@@ -173,34 +173,20 @@ def test_the_report_renders_in_a_headless_browser_with_its_table_and_pictures(sw
     assert png_size(os.path.join(SHOTS, 'report_phone.png'))[0] == 390
 
 
-LARGE = textwrap.dedent("""\
-    import io, json, sys
-    from closed_loop.batch import sweep, sweep_file
-    def peak_mb():
-        # This process's own peak (VmHWM: since its exec; ru_maxrss would count the pytest it was forked from).
-        with open('/proc/self/status') as f:
-            return next(int(line.split()[1]) for line in f if line.startswith('VmHWM:')) / 1024.0
-    if __name__ == '__main__':
-        built = sweep_file.build('large', {'world': 'empty', 'time_limit_s': 0.2},
-                                 {'seed': {'from': 0, 'to': int(sys.argv[1]) - 1, 'step': 1}},
-                                 report={'max_pictures': int(sys.argv[3])})
-        rows = sweep.run(built, sys.argv[2], workers=2, stream=io.StringIO())
-        print(json.dumps({'rows': len(rows), 'peak_mb': peak_mb()}))
-    """)
-
-
 def test_a_large_sweep_of_failures_draws_only_its_first_pictures_and_holds_no_trajectories(tmp_path):
     """100 episodes that all time out (0.2 s in an empty world): the report keeps its first 25 pictures
     (max_pictures; 100 by default), no trajectory comes back, and the sweep's own process stays small
     (bench_report runs 10,000 with the default)."""
-    script = tmp_path / 'large.py'
-    script.write_text(LARGE)
-    done = subprocess.run([sys.executable, str(script), '100', str(tmp_path / 'out'), '25'], stdout=subprocess.PIPE,
+    script = os.path.join(ROOT, 'test', 'bench', 'large_sweep.py')
+    done = subprocess.run([sys.executable, script, '100', str(tmp_path / 'out'), '25'], stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=400)
     assert done.returncode == 0, done.stdout[-3000:]
     figures = json.loads(done.stdout.strip().splitlines()[-1])
     rows = rows_of(tmp_path / 'out')
-    assert figures['rows'] == len(rows) == 100 and {r['outcome'] for r in rows.values()} == {'timed_out'}
+    assert figures['status'] == 0 and figures['rows'] == len(rows) == 100
+    assert {r['outcome'] for r in rows.values()} == {'timed_out'}
+    page = (tmp_path / 'out' / 'report.html').read_text()
+    assert 'Not as meant (100)' in page and page.count('<figure id="episode-') == 25
     assert len(os.listdir(tmp_path / 'out' / 'pictures')) == 25
     assert (tmp_path / 'out' / 'trajectories.jsonl').read_text() == ''
     assert figures['peak_mb'] < 250, figures

@@ -15,6 +15,7 @@ from conftest import ROOT, HandCluster
 
 from closed_loop.batch import sweep, sweep_file, sweep_report, tune_thresholds
 from closed_loop.batch.episode import EpisodeSpec
+from closed_loop.batch.tally import Tally
 
 TINY = """name: tiny
 base: {world: wall, controller: stop_on_obstacle, time_limit_s: 15}
@@ -165,7 +166,8 @@ def test_a_sweep_killed_at_random_moments_and_resumed_has_every_row_once_and_the
     rows = rows_of(tmp_path / 'out' / 'rows.csv')
     assert sorted(int(r['index']) for r in rows) == list(range(60))
     assert sorted(r['spec'] for r in rows) == sorted(r['spec'] for r in whole)
-    assert sweep_report.summarize(rows, built.keys) == sweep_report.summarize(whole, built.keys)
+    summary = sweep_report.summarize
+    assert summary(Tally.of(rows, built.keys)) == summary(Tally.of(whole, built.keys))
     results = ('outcome', 'time_s', 'final_x', 'final_y', 'final_yaw', 'min_clearance_m')
     by_spec = {r['spec']: [r[k] for k in results] for r in whole}
     assert all([r[k] for k in results] == by_spec[r['spec']] for r in rows)

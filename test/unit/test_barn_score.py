@@ -7,6 +7,7 @@ import pytest
 
 from closed_loop.batch import report_page
 from closed_loop.batch.judge import BENCHMARK_GOAL_M, BENCHMARK_START_M, Judge, JudgeSettings
+from closed_loop.batch.tally import Tally
 from closed_loop.sim import barn, barn_score
 
 SETTINGS = barn.BarnSettings(seed=0, fill=0.3)
@@ -70,10 +71,11 @@ def test_the_judge_clocks_the_run_from_a_tenth_of_a_metre_off_the_start_to_a_met
 
 
 def test_the_headline_gives_the_mean_score_where_rows_have_one():
-    rows = [dict(outcome='reached', contacts='0', time_s='20.0', benchmark_score=s) for s in ('0.25', '0.125', '')]
-    assert "the BARN benchmark's score: mean 0.188 over 2 episodes (at most 0.5)" in report_page._outcomes(rows)
-    assert 'benchmark' not in report_page._outcomes([dict(outcome='reached', contacts='0', time_s='2.0',
-                                                           benchmark_score='')])
+    rows = [dict(index=str(i), outcome='reached', contacts='0', time_s='20.0', min_clearance_m='0.5',
+                 benchmark_score=s) for i, s in enumerate(('0.25', '0.125', ''))]
+    assert ("the BARN benchmark's score: mean 0.188 over 2 episodes (at most 0.5)"
+            in report_page._outcomes(Tally.of(rows, [])))
+    assert 'benchmark' not in report_page._outcomes(Tally.of([dict(rows[0], benchmark_score='')], []))
 
 
 def test_a_sweep_row_scores_a_barn_method_world_and_no_other():

@@ -10,6 +10,7 @@ from matplotlib import image
 from closed_loop.batch import pictures, report_page, rerun, sweep_file
 from closed_loop.batch.episode import EpisodeSpec, run_episode
 from closed_loop.batch.judge import track_from_dict
+from closed_loop.batch.tally import Tally
 from closed_loop.sim import shapes
 from closed_loop.sim.world import load_world, resolve_world
 from closed_loop.sim.profiles import PACKAGE_ROOT
@@ -83,12 +84,14 @@ def test_the_page_escapes_what_it_shows_and_loads_nothing_from_elsewhere(tmp_pat
     sweep = types.SimpleNamespace(name='page', keys=['seed'], report={'pictures': 'failures'},
                                   text='name: page  # </pre><script>alert(1)</script>')
     rows = [{'index': '0', 'spec': '{"seed": 0}', 'seed': '0', 'outcome': 'collided', 'contacts': '1',
-             'why': 'collided <at> the wall'},
-            {'index': '1', 'spec': '{"seed": 1}', 'seed': '1', 'outcome': 'stopped', 'contacts': '0', 'why': 'ok'}]
+             'why': 'collided <at> the wall', 'time_s': '3.0', 'min_clearance_m': '0.0'},
+            {'index': '1', 'spec': '{"seed": 1}', 'seed': '1', 'outcome': 'stopped', 'contacts': '0', 'why': 'ok',
+             'time_s': '5.0', 'min_clearance_m': '0.4'}]
     (tmp_path / 'pictures').mkdir()
     (tmp_path / 'pictures' / 'episode-00000.png').write_bytes(b'png')
     page = tmp_path / 'report.html'
-    report_page.write(str(page), sweep, rows, ['seed', 'episodes'], [['0', '1'], ['1', '1']], None,
+    tally = Tally.of(rows, sweep.keys, pictured=[0])
+    report_page.write(str(page), sweep, tally, ['seed', 'episodes'], [['0', '1'], ['1', '1']], None,
                       lambda i: str(tmp_path / 'pictures' / ('episode-%05d.png' % int(i))), ['rule: the rule'])
     text = page.read_text()
     assert '<script>alert' not in text and '&lt;at&gt;' in text
@@ -100,7 +103,7 @@ def test_the_page_escapes_what_it_shows_and_loads_nothing_from_elsewhere(tmp_pat
     assert text.index('as meant: 50.0%') < text.index('Not as meant (1)') < text.index('<h2>Summary')
     assert 'contacts: 1' in text and '<details><summary>' not in text.split('<h2>Summary')[1].split('<h2>')[0]
     long_body = [[str(i), '1'] for i in range(300)]
-    report_page.write(str(page), sweep, rows, ['seed', 'episodes'], long_body, None,
+    report_page.write(str(page), sweep, tally, ['seed', 'episodes'], long_body, None,
                       lambda i: str(tmp_path / 'pictures' / ('episode-%05d.png' % int(i))))
     text = page.read_text()
     assert '<details><summary>300 rows (open)</summary>' in text.split('<h2>Summary')[1]

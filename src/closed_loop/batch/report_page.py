@@ -10,7 +10,6 @@ import html
 import json
 import os
 
-from closed_loop.batch.pictures import is_failure
 from closed_loop.sim import barn_score
 
 #: The failing episodes the page lists, at most (the rest are in rows.csv).
@@ -94,32 +93,20 @@ def table(header, body, css_id):
             '</table></div>' % (css_id, head, rows))
 
 
-def _outcomes(rows):
-    counts = {}
-    for row in rows:
-        counts[row['outcome']] = counts.get(row['outcome'], 0) + 1
-    failing = sum(is_failure(r['outcome'], r.get('contacts')) for r in rows)
+def _outcomes(tally):
+    counts = tally.outcomes()
     spans = ''.join('<span%s>%s: %d</span>' % (' class="bad"' if outcome in ('collided', 'failed', 'timed_out', 'error')
                                                else '', esc(outcome), n) for outcome, n in sorted(counts.items()))
-    contacts = sum(int(r.get('contacts') or 0) for r in rows if str(r.get('contacts') or '0').isdigit())
-    times = [float(r['time_s']) for r in rows if _number(r.get('time_s'))]
     headline = '<span>as meant: %.1f%%</span><span%s>contacts: %d</span>' % (
-        100.0 * (len(rows) - failing) / len(rows) if rows else 0.0, ' class="bad"' if contacts else '', contacts)
-    if times:
-        headline += '<span>time: mean %.1f s, longest %.1f s</span>' % (sum(times) / len(times), max(times))
-    scores = [float(r['benchmark_score']) for r in rows if _number(r.get('benchmark_score'))]
-    if scores:
+        100.0 * (tally.rows - tally.failing) / tally.rows if tally.rows else 0.0, ' class="bad"' if tally.contacts
+        else '', tally.contacts)
+    if tally.times:
+        headline += '<span>time: mean %.1f s, longest %.1f s</span>' % (tally.time_sum / tally.times, tally.longest)
+    if tally.scores:
         headline += ('<span>the BARN benchmark\'s score: mean %.3f over %d episodes (at most %.1f)</span>'
-                     % (sum(scores) / len(scores), len(scores), barn_score.BEST))
+                     % (tally.score_sum / tally.scores, tally.scores, barn_score.BEST))
     return '<p class="outcomes"><span>%d episodes</span>%s<span class="bad">not as meant: %d</span>%s</p>' % (
-        len(rows), spans, failing, headline)
-
-
-def _number(text):
-    try:
-        return float(text) == float(text)          # (not NaN)
-    except (TypeError, ValueError):
-        return False
+        tally.rows, spans, tally.failing, headline)
 
 
 def _result(row):
@@ -135,10 +122,11 @@ def _spec(row):
         return row.get('spec', '')
 
 
-def write(path, sweep, rows, header, body, plot_file, picture_of, preface=()):
-    """Write the page to ``path``: ``sweep`` (a ``closed_loop.batch.sweep_file.Sweep``), its ``rows`` (dicts of
-    rows.csv), the summary table (``header``, ``body``), the plot's file (or None), ``picture_of(index)``: an
-    episode's picture file (drawn if it exists), ``preface``: lines to put first."""
+def write(path, sweep, tally, header, body, plot_file, picture_of, preface=()):
+    """Write the page to ``path``: ``sweep`` (a ``closed_loop.batch.sweep_file.Sweep``), its rows' ``tally`` (a
+    ``closed_loop.batch.tally.Tally`` kept with at least :data:`MAX_LISTED` failing rows and the indices that
+    have pictures), the summary table (``header``, ``body``), the plot's file (or None), ``picture_of(index)``:
+    an episode's picture file, ``preface``: lines to put first."""
     folder = os.path.dirname(os.path.abspath(path))
     parts = ['<!DOCTYPE html>', '<html lang="en"><head><meta charset="utf-8">',
              '<meta name="viewport" content="width=device-width, initial-scale=1">',
@@ -146,19 +134,18 @@ def write(path, sweep, rows, header, body, plot_file, picture_of, preface=()):
              '<h1>sweep <code>%s</code></h1>' % esc(sweep.name)]
     if preface:
         parts.append('<section class="preface" id="preface">%s</section>' % ''.join('<p>%s</p>' % esc(line) for line in preface))
-    parts.append(_outcomes(rows))
-    failing = sorted((r for r in rows if is_failure(r['outcome'], r.get('contacts'))), key=lambda r: int(r['index']))
-    drawn = [r for r in (failing if sweep.report['pictures'] != 'all' else rows) if os.path.exists(picture_of(r['index']))]
+    parts.append(_outcomes(tally))
+    drawn = tally.drawn_rows()
     drawn_ids = {r['index'] for r in drawn}
-    if failing:
-        listed = failing[:MAX_LISTED]
+    if tally.failing:
+        listed = tally.listed_rows()[:MAX_LISTED]
         keys = list(sweep.keys)
         body_rows = [['<a href="#episode-%s">%s</a>' % (esc(r['index']), esc(r['index']))
                       if r['index'] in drawn_ids else esc(r['index']), esc(r['outcome']), esc(r.get('contacts', ''))]
                      + [esc(r.get(k, '')) for k in keys] + [_Why(r.get('why') or r.get('error', ''))] for r in listed]
-        parts.append('<h2>Not as meant (%d)</h2>' % len(failing))
+        parts.append('<h2>Not as meant (%d)</h2>' % tally.failing)
         parts.append(table(['index', 'outcome', 'contacts'] + keys + ['why'], body_rows, 'failing'))
-        if len(failing) > len(listed):
+        if tally.failing > len(listed):
             parts.append('<p class="muted">The first %d are listed; rows.csv has them all.</p>' % len(listed))
     parts.append('<h2>Pictures (%d)</h2>' % len(drawn))
     parts.append('<p class="muted">Any episode again, as a picture or a bag to replay in rviz: <code>rosrun closed_loop '

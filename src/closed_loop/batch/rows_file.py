@@ -130,6 +130,22 @@ def open_rows(path, columns):
     return rows, [dict(zip(columns, next(csv.reader([text])))) for text in rows.lines[1:]]
 
 
+class Rows:
+    """A sweep's rows file, read as it is iterated (afresh each time): its rows as dicts of strings; ``len()``
+    counts them. Nothing is held between rows, so a sweep of any size is read in the memory of one row (a file
+    gone since raises FileNotFoundError: take ``list()`` of it first to keep the rows)."""
+
+    def __init__(self, path):
+        self.path = path
+
+    def __iter__(self):
+        with open(self.path, newline='') as f:
+            yield from csv.DictReader(f)
+
+    def __len__(self):
+        return sum(1 for _ in self)
+
+
 def open_trajectories(path):
     """The trajectories file (a JSON object per line) opened to append; torn lines set aside."""
     def whole(text, _position):

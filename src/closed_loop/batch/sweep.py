@@ -16,7 +16,6 @@ file's ``report:`` chooses, ``closed_loop.batch.pictures``). At the end: a summa
 or a node: ``closed_loop.batch.graph_episode``) keeps its files in ``OUTPUT/graphs/episode-INDEX``; when a
 local cluster closes, done or interrupted, the sweep waits for those graphs to be down.
 """
-import csv
 import dataclasses
 import json
 import logging
@@ -38,10 +37,13 @@ RESULT_COLUMNS = ('outcome', 'mode', 'time_s', 'contacts', 'min_clearance_m', 'f
                   'goal_error_m', 'path_m', 'peak_decel_mps2', 'missed_ticks', 'benchmark_time_s', 'benchmark_score',
                   'wall_s', 'error', 'why', 'logs')
 _CACHE = {}     # per worker process: worlds and profiles loaded once
-#: Episodes handed to the cluster ahead of the results: this many per worker thread (at least WINDOW_MIN), the
-#: next one as each finishes, so that neither this process nor the scheduler holds a task per episode of a
-#: sweep of thousands, and a sweep that has drawn its last picture stops asking for more within that many.
+#: Episodes handed to the cluster ahead of the results: this many per worker thread (at least WINDOW_MIN),
+#: topped up in one batch once half of them have come back, so that neither this process nor the scheduler holds a
+#: task per episode of a sweep of thousands, and a sweep that has drawn its last picture stops asking for more
+#: within that many.
 WINDOW_PER_THREAD, WINDOW_MIN = 8, 16
+#: Every this many episodes, Dask's memo of task names is emptied (see _run_todo).
+FORGET_NAMES_EVERY = 5000
 #: What the rest of a sweep is thought to need on disk before any is measured: a row, a picture (bytes), and
 #: the report at the end (summary, plot, page).
 ROW_BYTES, PICTURE_BYTES, REPORT_BYTES = 1024, 64 * 1024, 512 * 1024
@@ -141,16 +143,15 @@ def _clock(seconds):
 
 
 def read_rows(path):
-    """The rows of a sweep's CSV file, as dicts of strings ([] if it does not exist)."""
-    if not os.path.exists(path):
-        return []
-    with open(path, newline='') as f:
-        return list(csv.DictReader(f))
+    """The rows of a sweep's CSV file, as a list of dicts of strings ([] if it does not exist); to read them one
+    at a time, ``closed_loop.batch.rows_file.Rows``."""
+    return list(rows_file.Rows(path)) if os.path.exists(path) else []
 
 
 def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.stderr):
-    """Run ``sweep`` (a ``sweep_file.Sweep``) into the directory ``output``; returns all its rows. A disk too
-    full for the next row raises ``rows_file.NoRoom`` (every row before it whole)."""
+    """Run ``sweep`` (a ``sweep_file.Sweep``) into the directory ``output``; returns its rows, read from the file
+    as they are iterated (``rows_file.Rows``). A disk too full for the next row raises ``rows_file.NoRoom`` (every
+    row before it whole)."""
     os.makedirs(output, exist_ok=True)
     rows_path = os.path.join(output, 'rows.csv')
     if not resume and has_rows(rows_path):
@@ -180,7 +181,7 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
     finally:
         rows.close()
         traj.close()
-    return read_rows(rows_path)
+    return rows_file.Rows(rows_path)
 
 
 def has_rows(path):
@@ -201,13 +202,12 @@ class Writing:
         self.output, self.rows, self.traj, self.columns, self.left = output, rows, traj, columns, left
         self.keep = report['max_pictures'] - len(os.listdir(os.path.join(output, sweep_report.PICTURES)))
         self.choice = report['pictures'] if self.keep > 0 else 'none'
-        self.row_bytes, self.picture_bytes = [ROW_BYTES], [PICTURE_BYTES]
+        self.row_bytes, self.picture_bytes = ROW_BYTES, PICTURE_BYTES          # the largest yet
 
     def needed(self):
         """About how many bytes the rest of the sweep needs: its rows, its pictures, the report."""
-        row = max(self.row_bytes)
-        pictures = max(0, min(self.keep, self.left)) * max(self.picture_bytes) if self.choice != 'none' else 0
-        return self.left * row + pictures + REPORT_BYTES
+        pictures = max(0, min(self.keep, self.left)) * self.picture_bytes if self.choice != 'none' else 0
+        return self.left * self.row_bytes + pictures + REPORT_BYTES
 
     def write(self, i, assignment, spec, result):
         png = result.pop('picture_png', None)
@@ -215,10 +215,10 @@ class Writing:
         row = dict({k: _cell(v) for k, v in assignment.items()}, index=i, spec=row_key(spec),
                    **{c: result.get(c, '') for c in RESULT_COLUMNS})
         line = rows_file.csv_line(self.columns, row)
-        self.row_bytes.append(len(line.encode()))
+        self.row_bytes = max(self.row_bytes, len(line.encode()))
         try:
             if png is not None and self.keep > 0:
-                self.picture_bytes.append(len(png))
+                self.picture_bytes = max(self.picture_bytes, len(png))
                 _write_whole(sweep_report.picture_path(self.output, i), png)
                 self.keep -= 1
             if 'trajectory' in result:
@@ -248,10 +248,12 @@ def _run_todo(todo, writing, progress, scheduler, workers):
     """Run the episodes ``todo`` ((index, assignment, spec) each) on the cluster, handing it WINDOW_PER_THREAD
     per worker thread ahead, and write each result as it comes."""
     import distributed
+    from dask import utils as dask_utils
     client, cluster = client_for(scheduler, workers)
     logs_root = os.path.abspath(os.path.join(writing.output, 'graphs'))
     token = logs_back.claim(logs_root)
     window = max(WINDOW_MIN, WINDOW_PER_THREAD * sum(client.nthreads().values()))
+    refill = max(1, window // 2)        # the window is topped up once half of it has come back
     first = list(itertools.islice(todo, window))
     pending = itertools.chain(first, todo)
     futures = {}
@@ -259,11 +261,19 @@ def _run_todo(todo, writing, progress, scheduler, workers):
     expected = []
 
     def submit(count):
-        for i, a, s in itertools.islice(pending, count):
-            wanted = writing.choice if writing.keep > 0 else 'none'
-            args = (s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted, token, expected[0])
-            future = client.submit(run_row, *args, key='episode-%d-%s' % (i, _digest(s)), pure=False)
-            futures[future] = (i, a, s, args)
+        batch = list(itertools.islice(pending, count))
+        if not batch:
+            return
+        wanted = writing.choice if writing.keep > 0 else 'none'
+        args = [(s.to_dict(), os.path.join(logs_root, 'episode-%05d' % i), wanted, token, expected[0])
+                for i, _, s in batch]
+        # Handed over in batches, each of one task group ('episode'): Dask's scheduler keeps a record of each
+        # submission and of each task group for as long as the cluster lives, so one of either per episode
+        # would grow the sweep's process with every episode.
+        for future, (i, a, s), row_args in zip(client.map(run_row, *zip(*args), key=[('episode', i, _digest(s))
+                                                                                  for i, _, s in batch], pure=False),
+                                               batch, args):
+            futures[future] = (i, a, s, row_args)
             running.add(future)
     try:
         expected.append(worker_check.expected(client, cluster, [s for _, _, s in first]))
@@ -274,7 +284,13 @@ def _run_todo(todo, writing, progress, scheduler, workers):
                                                progress.stream)
             writing.write(i, assignment, spec, result)
             progress.update(result['outcome'])
-            submit(1)
+            if progress.done % FORGET_NAMES_EVERY == 0:
+                # Dask memoises the name of every task key it has seen, up to 100,000 (dask.utils.key_split, a
+                # functools cache), in this process, where a local cluster's scheduler runs; a sweep's keys are
+                # each seen once, so the memo only grows the sweep's memory: emptied now and then.
+                dask_utils.key_split.cache_clear()
+            if window - len(futures) >= refill:
+                submit(window - len(futures))
     finally:
         if sys.exc_info()[0] is not None and not quiet.verbose():
             # Interrupted (Ctrl-C, a full disk): the cluster goes down under running episodes, and Dask says so
@@ -325,8 +341,9 @@ def checking(done, total, stream=sys.stderr):
 def run_command(prog, make, output, args, preface=None):
     """What a sweep command does: build the sweep (``make()``), run it into ``output`` (default
     sweeps/NAME) and report (``closed_loop.batch.sweep_report``; ``preface(rows)``: lines the page puts
-    first). Returns (exit status, sweep, rows); a refused sweep (2), a full disk (3: one line naming the folder
-    and the room needed) or Ctrl-C (130) is said on stderr, with no sweep or rows."""
+    first). Returns (exit status, sweep, rows: a ``rows_file.Rows``, read as it is iterated); a refused sweep
+    (2), a full disk (3: one line naming the folder and the room needed) or Ctrl-C (130) is said on stderr, with
+    no sweep or rows."""
     quiet.set_verbose(args.verbose)
     try:
         built = make()
@@ -362,8 +379,9 @@ def main(argv=None):
     status, _, rows = run_command('sweep', lambda: sweep_file.load(args.spec, checking), args.output, args)
     if status:
         return status
-    errors = sum(r['outcome'] == 'error' for r in rows)
-    print('episodes: %d, errors: %d' % (len(rows), errors))
+    outcomes = [r['outcome'] == 'error' for r in rows]
+    errors = sum(outcomes)
+    print('episodes: %d, errors: %d' % (len(outcomes), errors))
     return 1 if errors else 0
 
 
