@@ -223,6 +223,11 @@ def run_sweep(env, sweep_path, output, *extra, timeout_s=600):
     return done, rows
 
 
+#: How many busy processes the tests that say a result does not depend on the load run beside it: one, as the rest
+#: of a test run loads the machine too (bench_graph holds graph episodes to it with two, ten times each).
+LOAD = 1
+
+
 class busy:
     """``with busy(2):`` two processes that only compute, at the test's own priority, for as long as the block runs
     (a loaded machine, for the tests that say a result does not depend on the load)."""

@@ -9,7 +9,7 @@ import math
 import os
 
 from closed_loop.batch.episode import EpisodeSpec, run_episode
-from conftest import busy, graph_leftovers, run_sweep, same_rows
+from conftest import LOAD, busy, graph_leftovers, run_sweep, same_rows
 
 #: A rospy.Timer of 10 Hz first fires 0.1 s after the node starts (simulated time 0).
 TIMER_PHASE_S = 0.1
@@ -20,10 +20,10 @@ AVOID = ('name: avoid\nbase: {world: obstacle_course, goal: [7.0, 0.0], controll
 
 
 def sweep_twice(tmp_path, name, text, loaded_text=None):
-    """The sweep ``text`` run on this machine as it is, then ``loaded_text`` (the same, or a part of it) beside two
-    busy processes: (rows, rows), each by its grid's values."""
+    """The sweep ``text`` run on this machine as it is, then ``loaded_text`` (the same, or a part of it) beside
+    ``LOAD`` busy processes: (rows, rows), each by its grid's values."""
     runs = []
-    for load, out, sweep in ((0, 'idle', text), (2, 'loaded', loaded_text or text)):
+    for load, out, sweep in ((0, 'idle', text), (LOAD, 'loaded', loaded_text or text)):
         path = tmp_path / (name + out + '.yaml')
         path.write_text(sweep)
         with busy(load):

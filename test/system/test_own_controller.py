@@ -15,7 +15,7 @@ import xml.etree.ElementTree as ET
 import pytest
 import rosbag
 
-from conftest import busy, fixture_workspace, graph_leftovers, run_sweep, same_rows
+from conftest import LOAD, busy, fixture_workspace, graph_leftovers, run_sweep, same_rows
 
 ROSTEST_TIMEOUT_S = 300
 
@@ -112,12 +112,12 @@ def test_both_controllers_run_as_graph_episodes_in_a_sweep_and_leave_nothing(fix
         assert os.path.isfile(os.path.join(row['logs'], 'graph.log')), row['logs']
         assert math.isfinite(float(row['wall_s']))
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}
-    # In lockstep, the same rows beside two busy processes (the rospy node answers each scan; the C++ one on a
+    # In lockstep, the same rows beside a busy process (the rospy node answers each scan; the C++ one on a
     # ros::Timer of simulated time): both controllers to the goal in front of the wall.
     front = tmp_path / 'front.yaml'
     with open(sweep) as f:
         front.write_text(f.read().replace('goal: [[2.0, 1.0], [5.0, 0.0]]', 'goal: [[2.0, 1.0]]'))
-    with busy(2):
+    with busy(LOAD):
         done, loaded = run_sweep(fixture_env, front, tmp_path / 'loaded', '--workers', '2')
     idle = {(r['controller'], r['goal']): r for r in rows.values()}
     loaded = {(r['controller'], r['goal']): r for r in loaded.values()}
