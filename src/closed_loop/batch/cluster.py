@@ -132,7 +132,7 @@ def client_for(scheduler, workers):
     dask.config.set({'distributed.worker.multiprocessing-method': 'forkserver',
                      'distributed.worker.preload': ['closed_loop.batch.local_worker']})
     cluster = distributed.LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                                       processes=True, host='127.0.0.1', dashboard_address=None)
+                                       processes=True, host='127.0.0.1', dashboard_address='127.0.0.1:0')
     return distributed.Client(cluster), cluster
 
 
