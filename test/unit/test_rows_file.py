@@ -89,3 +89,31 @@ def test_a_torn_header_is_set_aside_and_written_again(tmp_path):
     rows.close()
     assert existing == [] and path.read_bytes() == (','.join(COLUMNS) + '\r\n').encode()
     assert (tmp_path / 'rows.csv.torn').read_bytes() == b'index,sp\n'
+
+
+def test_rows_handed_one_at_a_time_are_the_rows_and_torn_ones_still_go_aside(tmp_path):
+    """A resumed sweep takes its rows one at a time (``each``): the same rows as the list, none held by the file."""
+    path = tmp_path / 'rows.csv'
+    write_rows(path, 5)
+    whole = path.read_bytes()
+    path.write_bytes(whole + b'4,{"world": "wall"},4,stop')            # a last row torn by a kill
+    seen = []
+    rows, listed = rows_file.open_rows(str(path), COLUMNS, seen.append)
+    rows.close()
+    assert listed is None and rows.torn == 1 and rows.count == 6
+    assert [r['index'] for r in seen] == ['0', '1', '2', '3', '4'] and seen[2] == {k: str(v) for k, v in row(2).items()}
+    assert path.read_bytes() == whole and (tmp_path / 'rows.csv.torn').read_bytes() == b'4,{"world": "wall"},4,stop\n'
+    assert not hasattr(rows, 'lines')
+
+
+def test_a_line_ended_by_a_carriage_return_alone_is_a_line_of_its_own(tmp_path):
+    """Lines are read as bytes.splitlines has them, a line at a time: a row cut between its CR and LF is torn, and
+    the whole row after it is kept."""
+    path = tmp_path / 'rows.csv'
+    write_rows(path, 2)
+    data = path.read_bytes()
+    first_end = data.index(b'\r\n', data.index(b'\r\n') + 2)      # the end of row 0
+    path.write_bytes(data[:first_end] + b'\r' + data[first_end + 2:])
+    rows, existing = rows_file.open_rows(str(path), COLUMNS)
+    rows.close()
+    assert rows.torn == 1 and [r['index'] for r in existing] == ['1']

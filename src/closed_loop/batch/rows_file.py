@@ -53,34 +53,37 @@ def csv_line(columns, row):
 
 
 class LineFile:
-    """A file of lines, appended one whole line at a time (``append``); ``check(text)`` says whether a line
-    read back is whole. Opened, it sets aside (to ``PATH.torn``) every line that is not, and ``lines`` are
-    the whole ones, in order (the header first, if the file has one)."""
+    """A file of lines, appended one whole line at a time (``append``); ``check(text, position)`` says whether a
+    line read back is whole (``position``: how many whole ones came before it). Opened, it reads the file a line at
+    a time, hands each whole one to ``take(text, position)`` (if given), sets aside (to ``PATH.torn``) every line
+    that is not, and ``count`` is how many are whole (the header first, if the file has one): a file of any size is
+    opened in the memory of its torn lines."""
 
-    def __init__(self, path, check):
+    def __init__(self, path, check, take=None):
         self.path = path
         with open(path, 'ab'):
             pass
-        with open(path, 'rb') as f:
-            data = f.read()
-        kept, torn = [], []
-        for line in data.splitlines(keepends=True):
+        torn, count = {}, 0                    # {line number: its bytes} of the lines that are not whole
+        for number, line in enumerate(_lines(path)):
             try:
                 text = line.decode('utf-8')
             except UnicodeDecodeError:
                 text = None
-            if text is not None and text.endswith('\n') and check(text.rstrip('\r\n'), len(kept)):
-                kept.append(line)
+            if text is not None and text.endswith('\n') and check(text.rstrip('\r\n'), count):
+                if take is not None:
+                    take(text.rstrip('\r\n'), count)
+                count += 1
             else:
-                torn.append(line)
-        self.torn = len(torn)
+                torn[number] = line
+        self.torn, self.count = len(torn), count
         if torn:
             with open(path + '.torn', 'ab') as side:
-                side.write(b''.join(line if line.endswith(b'\n') else line + b'\n' for line in torn))
+                side.write(b''.join(line if line.endswith(b'\n') else line + b'\n' for line in torn.values()))
             with open(path + '.part', 'wb') as whole:
-                whole.write(b''.join(kept))
+                for number, line in enumerate(_lines(path)):
+                    if number not in torn:
+                        whole.write(line)
             os.replace(path + '.part', path)
-        self.lines = [line.decode('utf-8').rstrip('\r\n') for line in kept]
         self.fd = os.open(path, os.O_WRONLY | os.O_APPEND)
 
     def append(self, text):
@@ -99,10 +102,19 @@ class LineFile:
         os.close(self.fd)
 
 
-def open_rows(path, columns):
+def _lines(path):
+    """The lines of the file at ``path`` as ``bytes.splitlines(keepends=True)`` has them (an end is \\n, \\r\\n or
+    \\r), read a line at a time."""
+    with open(path, 'rb') as f:
+        for chunk in f:                        # (each ends at a line feed: a CR LF is never cut in two)
+            yield from chunk.splitlines(keepends=True)
+
+
+def open_rows(path, columns, each=None):
     """``(LineFile, rows)``: a sweep's rows file opened to append rows of ``columns`` (the header written if
-    the file is new), and the whole rows already in it, as dicts of strings. A header of other columns (a
-    different sweep's file) raises SweepError."""
+    the file is new), and the whole rows already in it, as dicts of strings; with ``each``, each of them is handed
+    to ``each(row)`` as it is read instead, and rows is None (a resumed sweep of any size is read in the memory of
+    one row). A header of other columns (a different sweep's file) raises SweepError."""
     header = csv_line(columns, dict(zip(columns, columns))).rstrip('\r\n')
 
     def whole(text, position):
@@ -123,11 +135,16 @@ def open_rows(path, columns):
             first = f.readline().decode('utf-8', 'replace').rstrip('\r\n')
         if first and first != header and first.endswith(columns[-1]):
             raise SweepError("%s: its columns are another sweep's: choose another --output" % path)
-    rows = LineFile(path, whole)
-    if not rows.lines:
+    got = [] if each is None else None
+
+    def take(text, position):
+        if position:
+            (each or got.append)(dict(zip(columns, next(csv.reader([text])))))
+    rows = LineFile(path, whole, take)
+    if not rows.count:
         rows.append(header + '\r\n')
-        rows.lines.append(header)
-    return rows, [dict(zip(columns, next(csv.reader([text])))) for text in rows.lines[1:]]
+        rows.count = 1
+    return rows, got
 
 
 class Rows:

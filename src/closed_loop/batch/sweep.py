@@ -159,7 +159,8 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
                                     'another --output' % rows_path)
     columns = ['index', 'spec'] + list(sweep.keys) + list(RESULT_COLUMNS)
     try:
-        rows, existing = rows_file.open_rows(rows_path, columns)
+        done = set()                # the episodes already run: their specs' digests (a row's memory, not its text)
+        rows, _ = rows_file.open_rows(rows_path, columns, lambda row: done.add(_key_digest(row['spec'])))
         traj = rows_file.open_trajectories(os.path.join(output, 'trajectories.jsonl'))
         os.makedirs(os.path.join(output, sweep_report.PICTURES), exist_ok=True)
     except OSError as error:
@@ -169,9 +170,8 @@ def run(sweep, output, scheduler=None, workers=None, resume=False, stream=sys.st
     if rows.torn:
         stream.write('sweep: %d torn or corrupt line(s) of %s set aside in %s.torn; their episodes run again\n'
                      % (rows.torn, rows_path, rows_path))
-    done = {row['spec'] for row in existing}
     # The grid's episodes are made as they are handed out (a sweep of a million does not make them first).
-    todo = ((i, a, s) for i, (a, s) in enumerate(sweep.specs) if row_key(s) not in done)
+    todo = ((i, a, s) for i, (a, s) in enumerate(sweep.specs) if _key_digest(row_key(s)) not in done)
     total = len(sweep.specs)
     left = max(0, total - len(done))
     writing = Writing(output, rows, traj, columns, left, sweep.report)
@@ -321,6 +321,11 @@ def _digest(spec):
 def _digest_text(text):
     import hashlib
     return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+
+def _key_digest(key):
+    import hashlib
+    return hashlib.sha1(key.encode()).digest()
 
 
 def _cell(value):
