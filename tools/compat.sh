@@ -25,8 +25,10 @@ if [ ! -x "$venv/bin/python" ] || [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; 
   echo "compat: making $venv from $py"
   rm -rf "$venv"
   "$py" -m venv "$venv"
+  # Beside the pinned PyPI packages, what Debian gives the main venv that the unit tests import: PyYAML, and
+  # cryptography at Debian bookworm's version (python3-cryptography 38.0.4; the certificates' tests).
   "$venv/bin/python" -m pip install -q --disable-pip-version-check -r requirements.txt \
-    PyYAML==6.0.2 pytest==8.3.5
+    PyYAML==6.0.2 pytest==8.3.5 cryptography==38.0.4
   echo "$want" > "$stamp"
 fi
 "$venv/bin/python" --version

@@ -1,9 +1,15 @@
 """What a worker is checked for (closed_loop.batch.worker_check): this package's version and source, the packages
 that decide an episode, and the launch files a sweep names in packages; what differs, named."""
+import os
+
+import pytest
+
 from closed_loop.batch import worker_check
 from closed_loop.batch.episode import EpisodeSpec
 
 
+@pytest.mark.skipif('CMAKE_PREFIX_PATH' not in os.environ,
+                    reason='no catkin workspace in the environment (make compat runs without ROS)')
 def test_the_fingerprint_names_the_source_the_deciding_versions_and_the_packages_found():
     mine = worker_check.fingerprint(['closed_loop/launch/sim.launch', 'closed_loop/launch/nope.launch',
                                      'no_such_package_here/x.launch'])
