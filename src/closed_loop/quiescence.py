@@ -167,6 +167,12 @@ class Quiescence:
         self._threads.clear()
         self._processes.clear()
 
+    def restart(self):
+        """A new episode (a kept graph's): nothing missed, no poller known, the participants looked up again now."""
+        self.missed, self.excused = 0, set()
+        self.pollers, self.clock_pollers = set(), set()
+        self._refreshed, self._last = -float('inf'), None
+
     def find_pollers(self, window_s=POLLERS_WINDOW_S):
         """Look at the participants for ``window_s`` of wall time, while nothing is sent to them, in bins of
         :data:`POLLERS_BIN_S`, and keep as pollers the threads that ran in at least :data:`POLLERS_SHARE` of the

@@ -13,6 +13,7 @@ episode) is the result. Its row has the columns of an in-process episode, and ``
 says what: a launch that does not start, a node that dies, no verdict in time. When it is over, the graph is
 shut down and everything left of it killed, whatever happened.
 """
+import atexit
 import json
 import os
 import re
@@ -27,7 +28,7 @@ from xml.sax.saxutils import quoteattr
 import yaml
 
 from closed_loop import launcher
-from closed_loop.batch import graph_keeper, workspace
+from closed_loop.batch import graph_keeper, kept_graph, workspace
 from closed_loop.batch.spec import EpisodeError, generated_world, judge_settings, result_from_verdict
 from closed_loop.batch.judge import Verdict, track_from_dict
 from closed_loop.sim.profiles import PACKAGE_ROOT
@@ -39,6 +40,8 @@ STARTUP_S, SLACK_S = 40.0, 20.0
 SHUTDOWN_S = graph_keeper.GRACE_S + 10.0
 #: Where the keeper finds this package, as this process did.
 KEEPER_PATH = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(graph_keeper.__file__))))
+#: How often (wall s) the runner looks for the verdict, and for what went wrong.
+POLL_S = 0.05
 #: How many lines of a log an error quotes.
 TAIL_LINES = 8
 DIED = re.compile(r'\[([^\]\s]+?)-\d+\] process has died \[pid \d+, exit code (-?\d+)')
@@ -60,17 +63,37 @@ def _value(value):
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
-def launch_text(spec, prepared, folder, bag=None):
-    """The launch file of the episode's graph: scenario.launch with the episode's world, robot, goal and judge
-    (and its recorder, writing ``bag``, if given), the simulator's parameters, and the controller."""
-    p, c = prepared, prepared.graph
+def _world(spec, prepared, folder):
+    """The episode's world as the simulator's ``~world`` takes it (a generated one written to a file of its own)."""
     world = spec.world
-    if isinstance(world, dict):                                     # a generated world: a file of its own
+    if isinstance(world, dict):
         world = os.path.join(folder, 'world.yaml')
         with open(world, 'w') as f:
-            yaml.safe_dump(generated_world(spec.world, p.profile), f, sort_keys=False)
+            yaml.safe_dump(generated_world(spec.world, prepared.profile), f, sort_keys=False)
     elif os.path.isfile(world):
         world = os.path.abspath(world)
+    return world
+
+
+def sim_parameters(spec, prepared, world):
+    """The simulator's parameters (under ``/sim``) of the episode: its world, the command's latency and the
+    settings the spec gives it."""
+    sim = dict(prepared.sim_params, world=world)
+    sim.pop('camera')
+    if spec.command_delay_s is not None:
+        sim['command_delay'] = spec.command_delay_s
+    if spec.real_time_factor is not None:    # in real time, every step's clock goes out, faster than real time too
+        sim['max_clock_rate_hz'] = prepared.sim_params.get('physics_rate_hz', 100.0) * max(spec.real_time_factor, 1.0)
+    return sim
+
+
+def launch_text(spec, prepared, folder, bag=None, kept=False):
+    """The launch file of the episode's graph: scenario.launch with the episode's world, robot, goal and judge
+    (and its recorder, writing ``bag``, if given), the simulator's parameters, and the controller; ``kept``:
+    the graph but the simulator (scenario_nodes.launch), for a kept graph, which sets the simulator's parameters
+    itself (:func:`sim_parameters`)."""
+    p, c = prepared, prepared.graph
+    world = _world(spec, prepared, folder)
     judge = judge_settings(spec, p.controller_class)
     rtf = spec.real_time_factor
     args = {'world': world, 'robot': p.profile.name, 'camera': p.sim_params['camera'], 'lockstep': rtf is None,
@@ -94,12 +117,13 @@ def launch_text(spec, prepared, folder, bag=None):
     # (a launch file of yours may declare goal_x, goal_y, robot, world; it gets those it declares).
     lines = ['<launch>'] + ['  <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
                             for k, v in sorted(args.items())]
-    lines.append('  <include file="$(find closed_loop)/launch/scenario.launch" pass_all_args="true"/>')
-    sim = dict(p.sim_params)
-    if rtf is not None:    # in real time, every step's clock goes out, faster than real time too: timers run on it
-        sim['max_clock_rate_hz'] = p.sim_params.get('physics_rate_hz', 100.0) * max(rtf, 1.0)
-    sim.pop('camera')
-    lines += ['  <param name=%s value=%s/>' % (quoteattr('/sim/' + k), quoteattr(_value(v))) for k, v in sorted(sim.items())]
+    lines.append('  <include file="$(find closed_loop)/launch/%s.launch" pass_all_args="true"/>'
+                 % ('scenario_nodes' if kept else 'scenario'))
+    if not kept:
+        sim = sim_parameters(spec, p, world)
+        sim.pop('world'), sim.pop('command_delay', None)           # (scenario.launch's args)
+        lines += ['  <param name=%s value=%s/>' % (quoteattr('/sim/' + k), quoteattr(_value(v)))
+                  for k, v in sorted(sim.items())]
     if node:
         lines.append('  <node pkg="closed_loop" type=%s name=%s output="screen">' % (quoteattr(node), quoteattr(node)))
         lines += ['    <param name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v)))
@@ -153,7 +177,8 @@ def run_graph(spec, prepared, folder=None, bag=None):
     """Run the graph episode ``spec`` (resolved as ``prepared``) with its files in a new ``folder`` (None: a
     temporary one), recorded into ``bag`` if given (scenario.launch's recorder: every topic from t = 0). An
     earlier attempt's folder of that name (a worker that died, a resumed sweep) is kept beside it as
-    ``FOLDER.attempt-K``."""
+    ``FOLDER.attempt-K``. In lockstep (and unless the controller asks for ``fresh_graph``), the master and the
+    simulator are this process's kept graph's (:mod:`closed_loop.batch.kept_graph`); else a graph of its own."""
     started = time.monotonic()
     with _ONE_GRAPH:
         if folder is None:
@@ -161,35 +186,96 @@ def run_graph(spec, prepared, folder=None, bag=None):
         else:
             set_aside(folder)
             os.makedirs(folder)
+        kept = spec.real_time_factor is None and bag is None and not prepared.graph.get('fresh_graph')
         launch_file = os.path.join(folder, 'episode.launch')
         with open(launch_file, 'w') as f:
-            f.write(launch_text(spec, prepared, folder, bag))
+            f.write(launch_text(spec, prepared, folder, bag, kept=kept))
         mark = graph_mark(folder)
-        env = dict(os.environ, ROS_HOME=os.path.join(folder, 'ros_home'), ROS_LOG_DIR=os.path.join(folder, 'log'),
-                   PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))),
-                   **{launcher.MARK: mark})
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))))
         if prepared.graph.get('workspace'):
             env = workspace.environment(prepared.graph['workspace'], env, PACKAGE_ROOT, KEEPER_PATH)
-        with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
-            keeper = subprocess.Popen([sys.executable, '-m', graph_keeper.__name__, folder, launch_file],
-                                      stdin=subprocess.PIPE,
-                                      stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
-        try:
-            verdict, track, error = _wait(spec, folder, keeper)
-        finally:
-            keeper.stdin.close()                 # the keeper shuts the graph down
+        own = {'ROS_HOME': os.path.join(folder, 'ros_home'), 'ROS_LOG_DIR': os.path.join(folder, 'log'), launcher.MARK: mark}
+        if kept:
+            verdict, track, error = _run_kept(spec, prepared, folder, launch_file, env, own)
+        else:
             try:
-                keeper.wait(SHUTDOWN_S)
-            except subprocess.TimeoutExpired:
-                os.killpg(keeper.pid, 9)
-                keeper.wait()
-            launcher.kill_marked(mark)          # whatever the keeper could not
+                verdict, track, error = _run_own(spec, folder, launch_file, dict(env, **own))
+            finally:
+                launcher.kill_marked(mark)          # whatever the keeper could not
     wall_s = time.monotonic() - started
     if verdict is None:
         c = prepared.graph
         error = '%s: %s' % (c['launch'] if 'launch' in c else 'node ' + c['node'], error)
         return result_from_verdict(Verdict('error', why=error), error=error, logs=folder, wall_s=wall_s)
     return result_from_verdict(verdict, logs=folder, wall_s=wall_s, trajectory=track[0], contact_log=track[1])
+
+
+def _run_own(spec, folder, launch_file, env):
+    """The episode in a graph of its own (``closed_loop.batch.graph_keeper``)."""
+    with open(os.path.join(folder, 'keeper.log'), 'wb') as out:
+        keeper = subprocess.Popen([sys.executable, '-m', graph_keeper.__name__, folder, launch_file],
+                                  stdin=subprocess.PIPE,
+                                  stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+    try:
+        return _wait(spec, folder, keeper)
+    finally:
+        keeper.stdin.close()                 # the keeper shuts the graph down
+        try:
+            keeper.wait(SHUTDOWN_S)
+        except subprocess.TimeoutExpired:
+            os.killpg(keeper.pid, 9)
+            keeper.wait()
+
+
+#: This process's kept graph (one at a time: a Dask worker runs one episode at a time).
+_KEPT = []
+
+
+def _kept_graph(spec, prepared, env, sim_params, parent):
+    """This process's kept graph for ``prepared``'s robot and camera, ``env``, and its files in ``parent`` (a new
+    one where they differ, or where the last episode did not leave it clean)."""
+    key = (prepared.profile.name, prepared.sim_params['camera'], sorted(env.items()), parent)
+    if _KEPT and (_KEPT[0].key != key or not _KEPT[0].settle()):
+        _KEPT.pop().close()
+    if not _KEPT:
+        lines = ['<launch>', '  <include file="$(find closed_loop)/launch/sim.launch">']
+        lines += ['    <arg name=%s value=%s/>' % (quoteattr(k), quoteattr(_value(v))) for k, v in (
+            ('world', sim_params['world']), ('robot', prepared.profile.name),
+            ('camera', prepared.sim_params['camera']), ('paused', True), ('lockstep', True))]
+        lines.append('  </include>')
+        lines += ['  <param name=%s value=%s/>' % (quoteattr('/sim/' + k), quoteattr(_value(v)))
+                  for k, v in sorted(sim_params.items()) if k != 'world']
+        _KEPT.append(kept_graph.KeptGraph(key, '\n'.join(lines + ['</launch>', '']), env, parent))
+        atexit.register(close_kept_graph)
+    return _KEPT[0]
+
+
+def close_kept_graph():
+    """End this process's kept graph, if it has one."""
+    while _KEPT:
+        _KEPT.pop().close()
+
+
+def _run_kept(spec, prepared, folder, launch_file, env, own):
+    """The episode in this process's kept graph (its files beside the episode's folder, or in a temporary one)."""
+    sim_params = sim_parameters(spec, prepared, _world(spec, prepared, folder))
+    parent = os.path.dirname(os.path.abspath(folder))
+    try:
+        kept = _kept_graph(spec, prepared, env, sim_params, None if parent == tempfile.gettempdir() else parent)
+    except kept_graph.KeptGraphError as error:
+        return None, None, str(error)
+    if not kept.start(folder, launch_file, sim_params, own):
+        if kept.poll() is not None:
+            _KEPT.clear()
+            launcher.kill_marked(own[launcher.MARK])
+        return None, None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))
+    try:
+        return _wait(spec, folder, kept)
+    finally:
+        kept.end()
+        if kept.poll() is not None:
+            _KEPT.clear()
+            launcher.kill_marked(own[launcher.MARK])
 
 
 def graph_mark(folder):
@@ -224,9 +310,9 @@ def _wait(spec, folder, keeper):
             return None, None, 'node %s died (exit code %d): %s' % (failed[0], failed[1], _node_log(folder, failed[0]))
         if failed is not None:
             return None, None, 'roslaunch could not start node %s: %s' % failed
-        if keeper.poll() is not None:
+        if keeper.poll() is not None or os.path.exists(os.path.join(folder, 'keeper_error')):
             if os.path.exists(os.path.join(folder, 'keeper_error')):
                 return None, None, 'the graph did not start: %s' % _tail(os.path.join(folder, 'keeper_error'))
             return None, None, 'the launch ended before a verdict: %s' % _tail(os.path.join(folder, 'graph.log'))
-        time.sleep(0.2)
+        time.sleep(POLL_S)
     return None, None, 'no verdict within %.0f s of wall time: %s' % (budget_s, _tail(os.path.join(folder, 'graph.log')))

@@ -24,7 +24,7 @@ SUCCESS_RADIUS_M = JudgeSettings().success_radius
 
 
 #: The keys of a graph episode's controller mapping, and what a package name and an arg name look like.
-CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest', 'workspace')
+CONTROLLER_KEYS = ('launch', 'args', 'node', 'mode_topic', 'end_at_rest', 'workspace', 'fresh_graph')
 PACKAGE = re.compile(r'^[A-Za-z][A-Za-z0-9_]*$')
 ARG_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*$')
 
@@ -270,7 +270,7 @@ def benchmark_score(spec, result):
 def parse_controller(value, node_names):
     """A graph controller from an episode's ``controller`` mapping: ``{launch: PKG/path.launch or /abs/path,
     args: {NAME: VALUE}}`` or ``{node: NAME}`` (one of ``node_names``), with optional ``mode_topic`` (the
-    controller's mode, for the judge) and ``end_at_rest``; raises EpisodeError naming the field."""
+    controller's mode, for the judge), ``end_at_rest`` and ``fresh_graph``; raises EpisodeError naming the field."""
     unknown = sorted(set(value) - set(CONTROLLER_KEYS))
     if unknown:
         raise EpisodeError('controller.%s: expected one of %s' % (unknown[0], ', '.join(CONTROLLER_KEYS)))
@@ -310,4 +310,7 @@ def parse_controller(value, node_names):
             raise EpisodeError('controller.workspace: %s' % error)
     if not isinstance(value.get('mode_topic', ''), str) or not isinstance(value.get('end_at_rest', True), bool):
         raise EpisodeError('controller: mode_topic is a topic name and end_at_rest true or false')
+    if not isinstance(value.get('fresh_graph', False), bool):
+        raise EpisodeError('controller.fresh_graph: expected true (each episode in a graph of its own) or false, got %s'
+                           % (quote(value['fresh_graph']),))
     return value

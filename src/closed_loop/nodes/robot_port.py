@@ -23,13 +23,31 @@ class RobotPort:
     def __init__(self, node, index, setup, sensors):
         self.name = setup.name
         self.settings = setup.settings
-        self.view = node.sim.view(index)
         self._topic_prefix = setup.name + '/' if setup.name else ''
         self._frame_prefix = setup.name + '/' if setup.name else ''
-        namespaces = ('/%s/sim/' % setup.name, '~') if setup.name else ('~',)
-        self.sensors = []
+        self._index, self._line_table = index, sensors
         self.publishers = {}
-        for line in sensors:
+        self.attach(node)
+        self._lock = threading.Lock()
+        self._pending_command = None
+        self._cmd_source = SourceCheck(rospy.resolve_name(self.command_topic(self.name)))
+        # (tcp_nodelay: a publisher sends each command at once; with Nagle's algorithm a small message waits on the
+        # loopback for the acknowledgement of the one before, up to 40 ms, unseen by the lockstep's wait.)
+        self.cmd_sub = rospy.Subscriber(self.command_topic(self.name), Twist, self._on_cmd_vel, queue_size=10,
+                                        tcp_nodelay=True)
+        self.publishers['contact_count'].publish(UInt32(0))
+
+    def attach(self, node, settings=None):
+        """Take the robot of ``node.sim`` (a new simulation, as an episode is loaded into a kept graph: its sensors
+        made again, their settings read again; ``settings``: the robot's new SimSettings). A topic keeps its
+        publisher."""
+        index = self._index
+        if settings is not None:
+            self.settings = settings
+        self.view = node.sim.view(index)
+        namespaces = ('/%s/sim/' % self.name, '~') if self.name else ('~',)
+        self.sensors = []
+        for line in self._line_table:
             if line.shared and index > 0:
                 continue
             settings = (load_settings(line.sensor.settings_class, namespaces)
@@ -41,15 +59,8 @@ class RobotPort:
                 continue
             self.sensors.append((line, sensor))
             for topic, msg_type, queue, latched in line.publications:
-                self.publishers[topic] = node.publisher(self.topic(topic, line.shared), msg_type, queue, latched)
-        self._lock = threading.Lock()
-        self._pending_command = None
-        self._cmd_source = SourceCheck(rospy.resolve_name(self.command_topic(self.name)))
-        # (tcp_nodelay: a publisher sends each command at once; with Nagle's algorithm a small message waits on the
-        # loopback for the acknowledgement of the one before, up to 40 ms, unseen by the lockstep's wait.)
-        self.cmd_sub = rospy.Subscriber(self.command_topic(self.name), Twist, self._on_cmd_vel, queue_size=10,
-                                        tcp_nodelay=True)
-        self.publishers['contact_count'].publish(UInt32(0))
+                if topic not in self.publishers:
+                    self.publishers[topic] = node.publisher(self.topic(topic, line.shared), msg_type, queue, latched)
 
     @staticmethod
     def command_topic(name):
@@ -114,6 +125,11 @@ class RobotPort:
         for _line, sensor in self.sensors:
             sensor.reset()
         self.publishers['contact_count'].publish(UInt32(0))
+
+    def forget_sources(self):
+        """A new episode in a kept graph: the command's publishers so far are no one's now."""
+        self._cmd_source = SourceCheck(rospy.resolve_name(self.command_topic(self.name)))
+        self.heard()
 
     def messages(self, line, sensor, stamp):
         """Sample ``sensor``: its messages ``[(topic, message)]`` (none for a lazy sensor nobody listens to)."""

@@ -41,6 +41,7 @@ import rospy
 from std_msgs.msg import UInt32
 
 from closed_loop import netenv
+from closed_loop.batch.kept_graph import ROOT_VARIABLE
 from closed_loop.nodes.common import Publisher
 from closed_loop.quiescence import EVERY, Participants, Quiescence
 from closed_loop.sim.scheduler import LEARN_S, command_delay_steps
@@ -55,6 +56,7 @@ LEARN_HOLD_S, TICK_HOLD_S, SILENT_AFTER, HOLD_POLL_S = 0.002, 0.05, 3, 0.0002
 PAUSED_POLL_S = 0.01
 #: Wall time (s) a look-up of a subscriber's process may take.
 LOOKUP_S = 2.0
+
 
 
 def missed_publisher():
@@ -74,9 +76,14 @@ class LaunchNodes:
 
     def __init__(self, watchers=''):
         master = netenv.master_pid(rosgraph.get_master_uri())
-        self._left_out = {'/rosout': None}
-        self._left_out.update((rospy.resolve_name(name), None) for name in watchers.split())
-        self.participants = Participants(os.getppid(), extra=[master] if master else [], exclude=self.left_out)
+        self._watchers = ['/rosout'] + [rospy.resolve_name(name) for name in watchers.split()]
+        self.participants = Participants(launch_root(), extra=[master] if master else [], exclude=self.left_out)
+        self.forget()
+
+    def forget(self):
+        """A new episode in a kept graph: nodes are looked up again (a node of the last one may have the name of
+        one of this one)."""
+        self._left_out = dict.fromkeys(self._watchers)
         self._known = {}
 
     def left_out(self):
@@ -109,6 +116,13 @@ class LaunchNodes:
             return pid if code == 1 else None
         except (rosgraph.MasterException, OSError, xmlrpc.client.Error, ValueError):
             return None
+
+
+def launch_root():
+    """The process whose descendants take part: the launch that started the simulator, or the keeper of a kept
+    graph (``closed_loop.batch.kept_graph.ROOT_VARIABLE``), which starts each episode's own launch beside it."""
+    root = os.environ.get(ROOT_VARIABLE, '')
+    return int(root) if root.isdigit() and os.path.exists('/proc/' + root) else os.getppid()
 
 
 def write_through(publisher, launch_nodes):
@@ -202,6 +216,10 @@ def hold(node, gate, got, wanted, hold_s):
                 got[i] = (port, command)
 
 
+def _steps(n):
+    return '%d physics step%s' % (n, '' if n == 1 else 's')
+
+
 def _name(pid):
     try:
         with open('/proc/%d/comm' % pid) as f:
@@ -212,27 +230,36 @@ def _name(pid):
 
 def run(node):
     """The lockstep loop of :class:`closed_loop.nodes.sim_node.SimNode` ``node`` until shutdown."""
-    s, sim = node.scheduling, node.sim
-    schedule, tasks = node._schedule()
-    delay = command_delay_steps(s.command_delay, sim.dt_s)
-    step_ns = int(round(sim.dt_s * 1e9))
-    learn_steps, second_steps = int(round(LEARN_S / sim.dt_s)), int(round(1.0 / sim.dt_s))
+    s = node.scheduling
     keep_own_time()
     missed_pub = node.missed_pub
     gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
                       stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
-    queued = collections.deque()          # (step, port, command), in the order heard
-    answers = Answers(len(node.ports))
-    missed = 0
+    sim = None
     rospy.loginfo('sim_node: lockstep: each instant waits for the graph (at most %g s of wall time), commands '
-                  'reach the wheels %d physics step%s later', s.lockstep_timeout, delay, '' if delay == 1 else 's')
-    pollers = None                        # found at the first instant, the graph idle since the start
-    ahead = False                         # the clock of the coming step's sensor messages is out already
+                  'reach the wheels %s later', s.lockstep_timeout, _steps(command_delay_steps(s.command_delay,
+                                                                                              node.sim.dt_s)))
     try:
         while not node._stopped.is_set() and not rospy.is_shutdown():
-            if node._take_requests():
-                queued.clear()
-                ahead = False
+            if node._take_requests() or sim is not node.sim:    # the start, a reset, or an episode loaded
+                if sim is not None:
+                    queued.clear()
+                    ahead = False
+                if sim is not node.sim:
+                    sim, s = node.sim, node.scheduling
+                    schedule, tasks = node._schedule()
+                    delay = command_delay_steps(s.command_delay, sim.dt_s)
+                    step_ns = int(round(sim.dt_s * 1e9))
+                    learn_steps, second_steps = int(round(LEARN_S / sim.dt_s)), int(round(1.0 / sim.dt_s))
+                    queued = collections.deque()          # (step, port, command), in the order heard
+                    answers = Answers(len(node.ports))
+                    pollers = None                        # found at the first instant, the graph idle since the start
+                    ahead = False                         # the clock of the coming step's sensor messages is out already
+                    if gate.missed:
+                        missed_pub.publish(UInt32(0))
+                    gate.restart()
+                    gate.timeout_s = s.lockstep_timeout
+                    missed = 0
             if node._paused:
                 time.sleep(PAUSED_POLL_S)
                 continue

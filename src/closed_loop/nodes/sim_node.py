@@ -11,7 +11,7 @@ from nav_msgs.msg import Odometry
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import CameraInfo, Image, JointState, LaserScan
 from std_msgs.msg import Float32, String, UInt32
-from std_srvs.srv import Empty, EmptyResponse
+from std_srvs.srv import Empty, EmptyResponse, Trigger, TriggerResponse
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import MarkerArray
 
@@ -60,6 +60,10 @@ SERVICE_WAIT_S = 5.0
 PAUSED_POLL_S = 0.01
 
 
+class LoadError(Exception):
+    """A world or robot the simulator cannot load (the message says what)."""
+
+
 def same_profile(a, b):
     """True if profile references ``a`` and ``b`` name the same profile (a file of the user's by its path, however
     it is written: ``$(find PKG)/...``, ``PKG/...`` or a path)."""
@@ -105,7 +109,9 @@ class SimNode:
         clearance (std_msgs/Float32): the least distance (m) between the robot's collision shapes and any
             obstacle, by the physics (ground truth, for judging), while someone listens.
     Services:
-        ~reset_world, ~pause_physics, ~unpause_physics (std_srvs/Empty).
+        ~reset_world, ~pause_physics, ~unpause_physics (std_srvs/Empty); ~load_episode (std_srvs/Trigger: the
+        world and the settings read again from the parameters, a new simulation paused at t = 0, for the next
+        episode of a kept graph: ``closed_loop.batch.kept_graph``).
     Parameters: :class:`closed_loop.sim.simulation.SimSettings` (world, robot, drive),
     :class:`closed_loop.sim.scheduler.SchedulingSettings` (``~real_time_factor``, ``~max_clock_rate_hz``), and
     each sensor's settings class (``closed_loop.sim.sensors``: LIDAR, camera, odometry, wheel encoders).
@@ -116,29 +122,10 @@ class SimNode:
         self.settings = load_settings(SimSettings)
         self.scheduling = load_settings(SchedulingSettings)
         try:
-            path = world_mod.resolve_world(self.settings.world, os.path.join(package_path(), 'worlds'))
-            world = world_mod.load_world(path, check_starts=False)   # which robots; starts checked below
-        except world_mod.WorldError as error:
-            rospy.logfatal('sim_node: cannot load the world: %s', error)
-            sys.exit(1)
-        setups = self._robot_setups(world)
-        try:
-            # Every start must be free for its robot's footprint, not a generic disc.
-            footprints = {setup.name: robot_model.load_robot_model(setup.urdf, setup.settings.names).footprint
-                          for setup in setups}
-            world = world_mod.load_world(path, footprints if world.robots else footprints[''],
-                                         check_starts=self.settings.start_pose is None)
-            if self.settings.start_pose is not None:
-                world = world_robots.with_start(world, self.settings.start_pose, footprints.get(''),
-                                                world_mod.WorldError, '~start')
-        except robot_model.RobotModelError as error:
+            world, setups, path = self._load_world()
+        except LoadError as error:
             rospy.logfatal('sim_node: %s', error)
             sys.exit(1)
-        except world_mod.WorldError as error:
-            rospy.logfatal('sim_node: cannot load the world: %s', error)
-            sys.exit(1)
-        starts = {spec.name: spec.start for spec in world.robots} or {'': world.robot_start}
-        setups = [RobotSetup(setup.name, setup.settings, setup.urdf, starts[setup.name]) for setup in setups]
         self.sim = Simulation(world, self.settings, robots=setups)
         self.launch_nodes = sim_lockstep.LaunchNodes(self.scheduling.lockstep_watchers) if self.scheduling.lockstep else None
         self.ports = [RobotPort(self, index, setup, SENSORS) for index, setup in enumerate(setups)]
@@ -157,7 +144,61 @@ class SimNode:
         rospy.Service('~reset_world', Empty, lambda _: self._request('reset'))
         rospy.Service('~pause_physics', Empty, lambda _: self._request('pause'))
         rospy.Service('~unpause_physics', Empty, lambda _: self._request('unpause'))
+        rospy.Service('~load_episode', Trigger, lambda _: TriggerResponse(*self._request('load')))
         rospy.on_shutdown(self._stopped.set)
+
+    def _load_world(self):
+        """(world, robot setups with their starts, the world file's path) of ``~world`` and ``~start`` as the
+        parameters have them now; :class:`LoadError` says what is wrong."""
+        try:
+            path = world_mod.resolve_world(self.settings.world, os.path.join(package_path(), 'worlds'))
+            world = world_mod.load_world(path, check_starts=False)   # which robots; starts checked below
+            setups = self._robot_setups(world)
+            # Every start must be free for its robot's footprint, not a generic disc.
+            footprints = {setup.name: robot_model.load_robot_model(setup.urdf, setup.settings.names).footprint
+                          for setup in setups}
+            world = world_mod.load_world(path, footprints if world.robots else footprints[''],
+                                         check_starts=self.settings.start_pose is None)
+            if self.settings.start_pose is not None:
+                world = world_robots.with_start(world, self.settings.start_pose, footprints.get(''),
+                                                world_mod.WorldError, '~start')
+        except robot_model.RobotModelError as error:
+            raise LoadError(str(error))
+        except world_mod.WorldError as error:
+            raise LoadError('cannot load the world: %s' % error)
+        starts = {spec.name: spec.start for spec in world.robots} or {'': world.robot_start}
+        return world, [RobotSetup(setup.name, setup.settings, setup.urdf, starts[setup.name]) for setup in setups], path
+
+    def _load_episode(self):
+        """``~load_episode``, in the loop: the world and every setting read again from the parameters, a new
+        simulation at t = 0, paused; the same robots (their descriptions and topics) as before. Returns
+        (success, message)."""
+        old = self.settings, self.scheduling
+        try:
+            self.settings, self.scheduling = load_settings(SimSettings), load_settings(SchedulingSettings)
+            if self.scheduling.lockstep != old[1].lockstep:
+                raise LoadError('lockstep %s: this graph\'s simulator runs with lockstep %s'
+                                % (self.scheduling.lockstep, old[1].lockstep))
+            world, setups, path = self._load_world()
+            if [s.name for s in setups] != [port.name for port in self.ports]:
+                raise LoadError('world %s has robots %s, this graph %s: it needs a graph of its own' % (
+                    path, [s.name for s in setups], [port.name for port in self.ports]))
+        except (LoadError, ValueError) as error:
+            self.settings, self.scheduling = old
+            rospy.logerr('sim_node: load_episode: %s', error)
+            return False, str(error)
+        self.sim.close()
+        self.sim = Simulation(world, self.settings, robots=setups)
+        for port, setup in zip(self.ports, setups):
+            port.attach(self, setup.settings)
+            port.forget_sources()
+            port.reset()
+        self._paused = True
+        if self.launch_nodes is not None:
+            self.launch_nodes.forget()
+        self._publish_clock(rospy.Time(0))
+        rospy.loginfo('sim_node: episode loaded: world %r from %s, paused at t = 0', world.name, path)
+        return True, 'world %r at t = 0, paused' % world.name
 
     def _robot_setups(self, world):
         """One RobotSetup per robot (start filled in later). A one-robot world: the node's own settings
@@ -189,25 +230,31 @@ class SimNode:
 
     # -- inputs (other threads): store, and let the loop act -----------------------------------------------
     def _request(self, what):
-        done = threading.Event()
+        """Queue request ``what`` for the loop and wait for it: EmptyResponse, or for ``load`` (success, message)."""
+        done, result = threading.Event(), []
         with self._lock:
-            self._requests.append((what, done))
+            self._requests.append((what, (done, result)))
         if not done.wait(SERVICE_WAIT_S):
             rospy.logwarn('sim_node: %s request not carried out within %g s', what, SERVICE_WAIT_S)
-        return EmptyResponse()
+            return (False, 'not carried out within %g s' % SERVICE_WAIT_S) if what == 'load' else EmptyResponse()
+        return result[0] if what == 'load' else EmptyResponse()
 
     def _take_inputs(self):
+        """Drive by the commands heard, and carry out the requests (True if the world was reset or loaded)."""
         for port in self.ports:
             port.take_command()
-        self._take_requests()
+        return self._take_requests()
 
     def _take_requests(self):
-        """Carry out the service requests (True if the world was reset)."""
+        """Carry out the service requests (True if the world was reset or an episode loaded)."""
         with self._lock:
             requests, self._requests = self._requests, []
         reset = False
-        for what, done in requests:
-            if what == 'reset':
+        for what, (done, result) in requests:
+            if what == 'load':
+                result.append(self._load_episode())
+                reset = reset or result[0][0]
+            elif what == 'reset':
                 self.sim.reset_world()
                 for port in self.ports:
                     port.reset()
@@ -249,7 +296,9 @@ class SimNode:
         clock = ClockSchedule(s, sim.dt_s, time.monotonic())
         self._publish_clock()
         while not self._stopped.is_set() and not rospy.is_shutdown():
-            self._take_inputs()
+            if self._take_inputs() and sim is not self.sim:      # an episode loaded: a new simulation
+                sim = self.sim
+                schedule, tasks = self._schedule()
             if self._paused:
                 time.sleep(PAUSED_POLL_S)
                 wall_ref, sim_ref = time.monotonic(), sim.time_s
