@@ -250,6 +250,12 @@ def _kept_graph(spec, prepared, env, sim_params, parent):
     return _KEPT[0]
 
 
+def settle_kept_graph():
+    """Wait until this process's kept graph (if it has one) has brought its last episode down; True if it is ready
+    for the next (a bench times an episode's start-up apart from the last one's teardown)."""
+    return bool(_KEPT) and _KEPT[0].settle()
+
+
 def close_kept_graph():
     """End this process's kept graph, if it has one."""
     while _KEPT:

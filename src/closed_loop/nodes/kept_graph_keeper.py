@@ -94,30 +94,29 @@ class Keeper:
     def start(self, folder):
         with open(os.path.join(folder, 'episode.json')) as f:
             episode = json.load(f)
+        import roslaunch.parent                 # (imported once, kept: the lever of a kept graph's start-up)
+        import roslaunch.rlutil
+        from std_srvs.srv import Trigger
+        os.environ.update(episode['env'])      # (what the launch's nodes inherit: their logs' folder, the mark)
+        launch = roslaunch.parent.ROSLaunchParent(roslaunch.rlutil.get_or_generate_uuid(None, False),
+                                                  [episode['launch']], show_summary=False,
+                                                  sigint_timeout=graph_keeper.NODE_SIGINT_S,
+                                                  sigterm_timeout=graph_keeper.NODE_SIGTERM_S)
+        launch.config = episode_config(episode['launch'])    # (start() reads it only where it has none)
         for name, value in sorted(episode['sim_params'].items()):
             self._call('setParam', '/sim/' + name, value)
-        self._launch_settings(episode['launch'])
-        from std_srvs.srv import Trigger
+        self._launch_settings(launch.config)
         answer = self.service(LOAD, Trigger)
         if not answer.success:
             raise EpisodeRefused('the simulator could not load the episode: %s' % answer.message)
-        os.environ.update(episode['env'])      # (what the launch's nodes inherit: their logs' folder, the mark)
         output_to(os.path.join(folder, 'graph.log'))
-        import roslaunch.parent                 # (imported once, kept: the lever of a kept graph's start-up)
-        import roslaunch.rlutil
-        run_id = roslaunch.rlutil.get_or_generate_uuid(None, False)
-        launch = roslaunch.parent.ROSLaunchParent(run_id, [episode['launch']], show_summary=False,
-                                                  sigint_timeout=graph_keeper.NODE_SIGINT_S,
-                                                  sigterm_timeout=graph_keeper.NODE_SIGTERM_S)
         self.episode = [launch, episode['env'][MARK], False, folder]
         launch.start(auto_terminate=False)
 
-    def _launch_settings(self, launch_file):
+    def _launch_settings(self, config):
         """What the episode's launch sets for the simulator (``/sim/...``), set before it loads the episode, as in
         a graph of its own, where the launch's parameters are set before any node starts. A parameter the kept
         nodes read only at their start (``/robot_description``) the launch may not change."""
-        import roslaunch.config
-        config = roslaunch.config.load_config_default([launch_file], None, verbose=False)
         for name, param in sorted(config.params.items()):
             if name.startswith('/sim/'):
                 self._call('setParam', name, param.value)
@@ -149,7 +148,7 @@ class Keeper:
                 _signal(pid, sig)
             deadline = time.monotonic() + grace_s
             while time.monotonic() < deadline and any(_alive(pid) for pid in nodes):
-                time.sleep(0.02)
+                time.sleep(0.01)
         left = kill_marked(mark)
         launch.shutdown()
         output_to(os.path.join(self.folder, 'keeper.log'))
@@ -196,6 +195,23 @@ class Keeper:
                 self.base.wait(graph_keeper.GRACE_S)
             except subprocess.TimeoutExpired:
                 pass
+
+
+def episode_config(launch_file):
+    """roslaunch's configuration of ``launch_file``, as ``roslaunch.config.load_config_default`` makes it, but for
+    the parameters of roscore.xml (``/rosversion`` and ``/rosdistro``, which the graph has from its start): each
+    is a command run (``rosversion``), 0.3 s of the episode's start-up."""
+    import roslaunch.config
+    import roslaunch.core
+    import roslaunch.loader
+    import roslaunch.xmlloader
+    config = roslaunch.config.ROSLaunchConfig()
+    try:
+        roslaunch.xmlloader.XmlLoader().load(launch_file, config, verbose=False)
+    except (roslaunch.xmlloader.XmlParseException, roslaunch.loader.LoadException) as error:
+        raise roslaunch.core.RLException(error)
+    config.assign_machines()
+    return config
 
 
 _MISSING = object()
@@ -324,3 +340,4 @@ def main(argv=None):
 
 if __name__ == '__main__':
     main()
+

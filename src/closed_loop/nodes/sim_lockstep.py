@@ -69,7 +69,8 @@ def missed_publisher():
 
 class LaunchNodes:
     """Which nodes take part in the lockstep: the processes of the launch that started the simulator (its parent
-    roslaunch's descendants) and the master, but rosout and the ``watchers`` (node names: rviz), and the simulator's
+    roslaunch's descendants; in a kept graph, the keeper's, but the simulator's own roslaunch) and the master, but
+    rosout and the ``watchers`` (node names: rviz), and the simulator's
     own threads but its loop's (those that accept a new subscriber, and read what the graph sends it: a node that
     subscribes anew for each scan, as ``rospy.wait_for_message`` does, is connected at the same instant every
     time)."""
@@ -77,7 +78,10 @@ class LaunchNodes:
     def __init__(self, watchers=''):
         master = netenv.master_pid(rosgraph.get_master_uri())
         self._watchers = ['/rosout'] + [rospy.resolve_name(name) for name in watchers.split()]
-        self.participants = Participants(launch_root(), extra=[master] if master else [], exclude=self.left_out)
+        root = launch_root()
+        # In a kept graph, the simulator's own launch (its parent) only watches its nodes, as the root does.
+        self._launchers = {os.getppid()} if root != os.getppid() else set()
+        self.participants = Participants(root, extra=[master] if master else [], exclude=self.left_out)
         self.forget()
 
     def forget(self):
@@ -91,7 +95,7 @@ class LaunchNodes:
         for name, pid in self._left_out.items():
             if pid is None:
                 self._left_out[name] = self._pid(name)
-        return set(self._left_out.values()) - {None}
+        return (set(self._left_out.values()) | self._launchers) - {None}
 
     def has(self, caller_id):
         """True if node ``caller_id`` runs in one of the launch's processes (asked of it and the master once)."""
