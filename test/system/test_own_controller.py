@@ -133,7 +133,7 @@ def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_p
     by_case = {r['controller']: r for r in rows.values()}
     missing = by_case['{"launch": "fixture_controllers/launch/nope.launch"}']
     assert missing['outcome'] == 'error', missing
-    assert missing['error'].startswith('fixture_controllers/launch/nope.launch: the launch ended before a verdict'), missing
+    assert missing['error'].startswith('fixture_controllers/launch/nope.launch: the graph did not start: roslaunch: '), missing
     assert "No such file or directory: '" in missing['error'] and "/nope.launch'" in missing['error'], missing
     unstartable = by_case['{"launch": "fixture_controllers/launch/no_such_node.launch"}']
     assert unstartable['outcome'] == 'error', unstartable
@@ -146,7 +146,7 @@ def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_p
     assert silent['why'].endswith('no command ever reached the base'), silent
     stubborn = by_case['{"launch": "fixture_controllers/launch/misbehaving.launch", "args": {"how": "stubborn"}}']
     assert stubborn['outcome'] == 'stopped' and not stubborn['error'], stubborn
-    # It ignored SIGINT and SIGTERM at the end, and was stopped after roslaunch's grace (3 s, then 2 s).
+    # It ignored SIGINT and SIGTERM at the end, and was stopped after their grace (3 s, then 2 s).
     with open(os.path.join(stubborn['logs'], 'graph.log')) as f:
         text = f.read()
     assert 'escalating to SIGTERM' in text and 'escalating to SIGKILL' in text, text[-2000:]

@@ -194,7 +194,8 @@ def run_graph(spec, prepared, folder=None, bag=None):
         env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, (KEEPER_PATH, os.environ.get('PYTHONPATH')))))
         if prepared.graph.get('workspace'):
             env = workspace.environment(prepared.graph['workspace'], env, PACKAGE_ROOT, KEEPER_PATH)
-        own = {'ROS_HOME': os.path.join(folder, 'ros_home'), 'ROS_LOG_DIR': os.path.join(folder, 'log'), launcher.MARK: mark}
+        own = {'ROS_HOME': os.path.join(folder, 'ros_home'), 'ROS_LOG_DIR': os.path.join(folder, 'log'),
+               launcher.MARK: mark}
         if kept:
             verdict, track, error = _run_kept(spec, prepared, folder, launch_file, env, own)
         else:
@@ -231,10 +232,10 @@ def _run_own(spec, folder, launch_file, env):
 _KEPT = []
 
 
-def _kept_graph(spec, prepared, env, sim_params, parent):
-    """This process's kept graph for ``prepared``'s robot and camera, ``env``, and its files in ``parent`` (a new
-    one where they differ, or where the last episode did not leave it clean)."""
-    key = (prepared.profile.name, prepared.sim_params['camera'], sorted(env.items()), parent)
+def _kept_graph(spec, prepared, env, sim_params, mark_under):
+    """This process's kept graph for ``prepared``'s robot and camera and ``env`` (a new one where they differ, or
+    where the last episode did not leave it clean)."""
+    key = (prepared.profile.name, prepared.sim_params['camera'], sorted(env.items()))
     if _KEPT and (_KEPT[0].key != key or not _KEPT[0].settle()):
         _KEPT.pop().close()
     if not _KEPT:
@@ -245,8 +246,7 @@ def _kept_graph(spec, prepared, env, sim_params, parent):
         lines.append('  </include>')
         lines += ['  <param name=%s value=%s/>' % (quoteattr('/sim/' + k), quoteattr(_value(v)))
                   for k, v in sorted(sim_params.items()) if k != 'world']
-        _KEPT.append(kept_graph.KeptGraph(key, '\n'.join(lines + ['</launch>', '']), env, parent))
-        atexit.register(close_kept_graph)
+        _KEPT.append(kept_graph.KeptGraph(key, '\n'.join(lines + ['</launch>', '']), env, mark_under))
     return _KEPT[0]
 
 
@@ -257,17 +257,21 @@ def settle_kept_graph():
 
 
 def close_kept_graph():
-    """End this process's kept graph, if it has one."""
-    while _KEPT:
-        _KEPT.pop().close()
+    """End this process's kept graph, if it has one (after the episode it runs, if one does): at the end of a
+    sweep, on each of its workers, and when the process exits."""
+    with _ONE_GRAPH:
+        while _KEPT:
+            _KEPT.pop().close()
+
+
+atexit.register(close_kept_graph)
 
 
 def _run_kept(spec, prepared, folder, launch_file, env, own):
-    """The episode in this process's kept graph (its files beside the episode's folder, or in a temporary one)."""
+    """The episode in this process's kept graph."""
     sim_params = sim_parameters(spec, prepared, _world(spec, prepared, folder))
-    parent = os.path.dirname(os.path.abspath(folder))
     try:
-        kept = _kept_graph(spec, prepared, env, sim_params, None if parent == tempfile.gettempdir() else parent)
+        kept = _kept_graph(spec, prepared, env, sim_params, os.path.dirname(os.path.abspath(folder)))
     except kept_graph.KeptGraphError as error:
         return None, None, str(error)
     if not kept.start(folder, launch_file, sim_params, own):
@@ -279,6 +283,7 @@ def _run_kept(spec, prepared, folder, launch_file, env, own):
         return _wait(spec, folder, kept)
     finally:
         kept.end()
+        kept.settle()           # (the episode's folder whole before its row: its nodes write to it as they go)
         if kept.poll() is not None:
             _KEPT.clear()
             launcher.kill_marked(own[launcher.MARK])
@@ -322,3 +327,24 @@ def _wait(spec, folder, keeper):
             return None, None, 'the launch ended before a verdict: %s' % _tail(os.path.join(folder, 'graph.log'))
         time.sleep(POLL_S)
     return None, None, 'no verdict within %.0f s of wall time: %s' % (budget_s, _tail(os.path.join(folder, 'graph.log')))
+
+
+def close_kept_graphs(client, interrupted=False):
+    """At the end of a sweep, each worker's kept graph ends (``closed_loop.batch.graph_episode``): a cluster of
+    yours keeps nothing of the sweep up. Interrupted, a local cluster's workers go with their graphs; another's
+    graphs end by themselves once idle (``closed_loop.batch.kept_graph.IDLE_S``)."""
+    if not interrupted:
+        try:
+            client.run(close_kept_graph)
+        except Exception as error:      # a worker gone meanwhile: its graph went with it
+            print('a worker\'s kept graph could not be closed: %s' % error, file=sys.stderr)
+
+
+def wait_graphs_down(logs_root, timeout_s=graph_keeper.GRACE_S + 5.0):
+    """After a local cluster has closed (done, or Ctrl-C): the keepers of graph episodes it was running shut
+    their graphs down once their workers are gone; wait for that, then kill whatever is left of them."""
+    prefix = logs_root + os.sep
+    deadline = time.monotonic() + timeout_s
+    while launcher.marked_processes(prefix) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    launcher.kill_marked(prefix)

@@ -21,6 +21,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import uuid
 
 from closed_loop.batch import graph_keeper
 from closed_loop.launcher import MARK
@@ -48,17 +49,17 @@ class KeptGraph:
     """The runner's side: a keeper (this module, run as a process) and its graph, for the episodes of one worker
     whose graphs differ only in what the keeper sets for each (``key``: the rest, such as the robot)."""
 
-    def __init__(self, key, base_text, env, parent=None):
-        """The graph's files (the simulator's output in ``graph.log``) go in a new folder in ``parent`` (None: a
-        temporary one, removed when the graph is closed), under which its processes carry their mark."""
+    def __init__(self, key, base_text, env, mark_under):
+        """The graph's files go in a temporary folder, removed when it is closed (each episode's folder gets the
+        simulator's output of its episode: ``simulator.log``); its processes carry a mark under ``mark_under``
+        (the first episode's folder's parent: a sweep waits for what carries a mark under its own at its end)."""
         self.key = key
-        self.temporary = parent is None
-        self.folder = tempfile.mkdtemp(prefix='kept-graph-', dir=parent)
+        self.folder = tempfile.mkdtemp(prefix='closed_loop-kept-graph-')
         self.ending = False                 # an episode's end asked for, its answer not read yet
         base = os.path.join(self.folder, 'base.launch')
         with open(base, 'w') as f:
             f.write(base_text)
-        env = dict(env, **{MARK: os.path.join(self.folder, 'run-%d' % os.getpid())})
+        env = dict(env, **{MARK: os.path.join(mark_under, 'kept-graph-%d-%s' % (os.getpid(), uuid.uuid4().hex))})
         with open(os.path.join(self.folder, 'keeper.log'), 'wb') as log:
             self.process = subprocess.Popen([sys.executable, '-m', KEEPER, self.folder, base], stdin=subprocess.PIPE,
                                             stdout=subprocess.PIPE, stderr=log, env=env, start_new_session=True)
@@ -99,8 +100,6 @@ class KeptGraph:
         graph cannot be used again, it is closed: :meth:`poll` says so)."""
         with open(os.path.join(folder, 'episode.json'), 'w') as f:
             json.dump({'launch': launch_file, 'sim_params': sim_params, 'env': env}, f)
-        with open(os.path.join(folder, 'graph.log'), 'a') as f:
-            f.write('[kept graph] the simulator\'s output: %s\n' % os.path.join(self.folder, 'graph.log'))
         answer = self.ask('episode ' + os.path.abspath(folder), READY_S) if self.settle() else None
         if answer is None:
             with open(os.path.join(folder, 'keeper_error'), 'w') as f:
@@ -143,5 +142,4 @@ class KeptGraph:
             os.killpg(self.process.pid, signal.SIGKILL)
             self.process.wait()
         self.process.stdout.close()
-        if self.temporary:
-            shutil.rmtree(self.folder, ignore_errors=True)
+        shutil.rmtree(self.folder, ignore_errors=True)

@@ -38,7 +38,8 @@ import sys
 import warnings
 
 from closed_loop import cli
-from closed_loop.batch import logs_back, pictures, rows_file, sweep, sweep_file, sweep_report, worker_check
+from closed_loop.batch import (graph_episode, logs_back, pictures, rows_file, sweep, sweep_file, sweep_report,
+                               worker_check)
 from closed_loop.yaml_check import Checker, FileError, load_yaml, quote, read_text
 
 TOP_KEYS = ('name', 'base', 'space', 'budget', 'batch', 'seed', 'sampler', 'failure', 'report')
@@ -256,6 +257,7 @@ def run(search, output, scheduler=None, workers=None, resume=False, stream=sys.s
                 progress.update('failure' if failing else result['outcome'])
             done += len(trials)
     finally:
+        graph_episode.close_kept_graphs(client, interrupted=sys.exc_info()[0] is not None)
         for handle in (rows, traj, client):
             handle.close()
         if cluster is not None:

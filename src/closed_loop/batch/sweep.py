@@ -25,8 +25,8 @@ import sys
 import itertools
 import time
 
-from closed_loop import cli, launcher
-from closed_loop.batch import graph_keeper, logs_back, pictures, rows_file, sweep_file, sweep_report, worker_check
+from closed_loop import cli
+from closed_loop.batch import graph_episode, logs_back, pictures, rows_file, sweep_file, sweep_report, worker_check
 from closed_loop.batch.graph_episode import set_aside
 from closed_loop.batch.cluster import add_arguments as add_cluster_arguments, client_for, scheduler_of
 from closed_loop.sim import quiet
@@ -298,20 +298,11 @@ def _run_todo(todo, writing, progress, scheduler, workers):
             logging.getLogger('distributed').setLevel(logging.CRITICAL)
         for future in list(futures):
             future.cancel()
+        graph_episode.close_kept_graphs(client, interrupted=sys.exc_info()[0] is not None)
         client.close()
         if cluster is not None:
             cluster.close()
-            _wait_graphs_down(logs_root)
-
-
-def _wait_graphs_down(logs_root, timeout_s=graph_keeper.GRACE_S + 5.0):
-    """After a local cluster has closed (done, or Ctrl-C): the keepers of graph episodes it was running shut
-    their graphs down once their workers are gone; wait for that, then kill whatever is left of them."""
-    prefix = logs_root + os.sep
-    deadline = time.monotonic() + timeout_s
-    while launcher.marked_processes(prefix) and time.monotonic() < deadline:
-        time.sleep(0.2)
-    launcher.kill_marked(prefix)
+            graph_episode.wait_graphs_down(logs_root)
 
 
 def _digest(spec):

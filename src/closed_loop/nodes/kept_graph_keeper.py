@@ -1,27 +1,27 @@
-"""The keeper of a kept graph (``closed_loop.batch.kept_graph``): a master, the simulator and robot_state_publisher kept up across a worker's graph episodes,
-every node of the episode's own (the judge, the controller, what its launch file starts) new each time.
+"""The keeper of a kept graph (``closed_loop.batch.kept_graph``, which starts it): a master, the simulator and
+robot_state_publisher kept up across a worker's graph episodes.
 
-    python3 -m closed_loop.nodes.kept_graph_keeper FOLDER BASE_LAUNCH      (started by ``closed_loop.batch.kept_graph.KeptGraph``)
+    python3 -m closed_loop.nodes.kept_graph_keeper FOLDER BASE_LAUNCH
 
-The keeper starts the master and ``BASE_LAUNCH`` (``sim.launch``, paused, in lockstep) as
-``closed_loop.batch.graph_keeper`` does one episode's graph, notes the parameters and the nodes it then has,
-prints ``ready``, and then takes one line at a time on its standard input:
+It starts the master and ``BASE_LAUNCH`` (``sim.launch``, paused, in lockstep) as ``closed_loop.batch.graph_keeper``
+does one episode's graph, notes the parameters and the nodes it then has, prints ``ready``, and then takes one
+line at a time on its standard input:
 
 - ``episode FOLDER``: FOLDER/episode.json names the episode's launch file, the simulator's parameters and the
-  environment of its nodes. The keeper sets those parameters under ``/sim``, has the simulator load the episode
-  (``/sim/load_episode``: the world and every setting read again, a new simulation paused at t = 0), starts
-  the episode's launch (``scenario_nodes.launch``: the judge unpauses the simulator once the controller is
-  connected) and answers ``started``, or ``failed`` with why in FOLDER/keeper_error.
-- ``end``: the simulator paused, the episode's launch brought down and every process that carries the
-  episode's mark killed; what the episode's nodes registered with the master and left behind unregistered;
-  every parameter set back to what the graph had before its first episode (the ones added deleted). Answers
-  ``clean``, or ``dirty WHY`` when something of the episode could not be removed (the runner then ends this
-  graph and starts another).
+  environment of its nodes. The keeper sets those parameters under ``/sim`` (and those the launch sets there),
+  has the simulator load the episode (``/sim/load_episode``), starts the episode's launch (roslaunch, in this
+  process: its nodes' output in FOLDER/graph.log) and answers ``started``, or ``failed`` with why in
+  FOLDER/keeper_error.
+- ``end``: the simulator paused, every process that carries the episode's mark given SIGINT, SIGTERM, SIGKILL;
+  what the episode's nodes registered with the master and left behind unregistered; every parameter set back to
+  what the graph had before its first episode (the ones added deleted); the simulator's output of the episode
+  in FOLDER/simulator.log. Answers ``clean``, or ``dirty WHY`` when something of the episode could not be removed
+  (the runner then ends this graph and starts another).
 
-The simulator's processes are the lockstep's root's descendants (``CLOSED_LOOP_LOCKSTEP_ROOT``: the keeper),
-so each episode's launch, started by the keeper, takes part. The graph goes down, whatever is left of it
-killed, when the keeper's standard input closes (the worker is done or died), on SIGTERM or SIGINT, after
-:data:`IDLE_S` without an episode, or when the simulator's launch ends.
+The lockstep's root (``CLOSED_LOOP_LOCKSTEP_ROOT``) is the keeper, so each episode's nodes, its children, take
+part. The graph goes down, whatever is left of it killed, when the keeper's standard input closes (the worker is
+done or died), on SIGTERM or SIGINT, after :data:`IDLE_S` without an episode, or when the simulator's launch
+ends.
 """
 import json
 import os
@@ -53,6 +53,7 @@ class Keeper:
                                          stdout=log, stderr=subprocess.STDOUT, env=env)
         self.api = netenv.bounded_proxy(self.uri, CALL_S)
         self.episode = None             # [the episode's roslaunch, its mark, its end said, its folder]
+        self.simulator_from = 0         # where the episode's part of the simulator's output begins
         self._wait_for_service(LOAD)
         self.params = self._call('getParam', '/')
         self.nodes = self._nodes()
@@ -111,6 +112,7 @@ class Keeper:
             raise EpisodeRefused('the simulator could not load the episode: %s' % answer.message)
         output_to(os.path.join(folder, 'graph.log'))
         self.episode = [launch, episode['env'][MARK], False, folder]
+        self.simulator_from = self._simulator_size()
         launch.start(auto_terminate=False)
 
     def _launch_settings(self, config):
@@ -142,8 +144,17 @@ class Keeper:
         self.service(PAUSE, Empty)
         launch, mark, _, folder = self.episode
         self.episode = None
-        for sig, grace_s in ((signal.SIGINT, graph_keeper.NODE_SIGINT_S), (signal.SIGTERM, graph_keeper.NODE_SIGTERM_S)):
+        names = {}
+        for sig, grace_s in ((signal.SIGINT, graph_keeper.NODE_SIGINT_S), (signal.SIGTERM, graph_keeper.NODE_SIGTERM_S),
+                             (signal.SIGKILL, 0.0)):
             nodes = [pid for pid in marked_processes(mark) if _alive(pid)]
+            names.update((pid, _command(pid)) for pid in nodes if pid not in names)
+            if nodes and sig != signal.SIGINT:     # (said as roslaunch says it, in the episode's graph.log)
+                print('[kept graph] %s still up after %s: escalating to %s' % (
+                    ', '.join('%s (pid %d)' % (names[pid], pid) for pid in nodes),
+                    'SIGINT' if sig == signal.SIGTERM else 'SIGTERM', signal.Signals(sig).name), flush=True)
+            if sig == signal.SIGKILL:
+                break
             for pid in nodes:
                 _signal(pid, sig)
             deadline = time.monotonic() + grace_s
@@ -152,6 +163,7 @@ class Keeper:
         left = kill_marked(mark)
         launch.shutdown()
         output_to(os.path.join(self.folder, 'keeper.log'))
+        self._simulator_output(os.path.join(folder, 'simulator.log'))
         if left:
             return 'processes %s of the episode could not be killed' % left
         for node, entries in self._nodes().items():
@@ -162,6 +174,21 @@ class Keeper:
             return 'nodes %s are still registered with the master' % left
         self._restore_params()
         return None
+
+    def _simulator_size(self):
+        try:
+            return os.path.getsize(os.path.join(self.folder, 'graph.log'))
+        except OSError:
+            return 0
+
+    def _simulator_output(self, path):
+        """What the simulator's launch printed during the episode, into ``path`` (the episode's folder)."""
+        try:
+            with open(os.path.join(self.folder, 'graph.log'), 'rb') as f, open(path, 'wb') as out:
+                f.seek(self.simulator_from)
+                out.write(f.read())
+        except OSError:
+            pass
 
     def _unregister(self, node, entries):
         """What ``node`` (gone) registered, as ``rosnode cleanup`` removes it."""
@@ -242,6 +269,16 @@ def _signal(pid, sig):
         pass
 
 
+def _command(pid):
+    """A process's program, as a log line names it."""
+    try:
+        with open('/proc/%d/cmdline' % pid, 'rb') as f:
+            argv = [a for a in f.read().split(b'\0') if a]
+        return ' '.join(os.path.basename(a.decode(errors='replace')) for a in argv[:2])[:80]
+    except OSError:
+        return '?'
+
+
 def _alive(pid):
     """True while ``pid`` runs (not a zombie: a node roslaunch has not reaped yet counts as gone)."""
     try:
@@ -277,7 +314,7 @@ def serve(keeper, lines, out):
             except Exception as error:       # (roslaunch's own for a launch file it cannot read, among others)
                 with open(os.path.join(argument, 'keeper_error'), 'w') as f:
                     f.write('%s\n' % (error if isinstance(error, EpisodeRefused) else '%s: %s' % (
-                        type(error).__name__, error)))
+                        'roslaunch' if type(error).__name__ == 'RLException' else type(error).__name__, error)))
                 why = keeper.end() if keeper.episode is not None else None
                 answer = 'failed' if why is None else 'dirty ' + why
         elif command == 'end':

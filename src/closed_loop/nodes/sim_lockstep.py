@@ -258,7 +258,7 @@ def run(node):
                     queued = collections.deque()          # (step, port, command), in the order heard
                     answers = Answers(len(node.ports))
                     pollers = None                        # found at the first instant, the graph idle since the start
-                    ahead = False                         # the clock of the coming step's sensor messages is out already
+                    ahead = False       # the clock of the coming step's sensor messages is out already
                     if gate.missed:
                         missed_pub.publish(UInt32(0))
                     gate.restart()
