@@ -11,8 +11,8 @@ from std_msgs.msg import String
 from closed_loop.watchdog import SilenceWatchdog
 from closed_loop.control.guard import GuardSettings, GuardVerdict, filter_command, scan_problem
 from closed_loop.control.scan import scan_points
-from closed_loop.nodes.common import (LiveSettings, Publisher, StopsOnShutdown, frame_id, init_node, load_settings,
-                                      robot_geometry, spin)
+from closed_loop.nodes.common import (LiveSettings, Publisher, StopsOnShutdown, frame_id, init_node,
+                                      load_settings, robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.control.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -159,4 +159,4 @@ class CmdVelGuard(StopsOnShutdown):
 def main():
     init_node('cmd_vel_guard')
     CmdVelGuard()
-    spin()
+    rospy.spin()

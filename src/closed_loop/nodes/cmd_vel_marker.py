@@ -9,7 +9,7 @@ from std_msgs.msg import ColorRGBA, Float32, String
 from visualization_msgs.msg import Marker
 
 from closed_loop.control import markers
-from closed_loop.nodes.common import Publisher, frame_id, init_node, load_settings, spin
+from closed_loop.nodes.common import Publisher, frame_id, init_node, load_settings
 
 ARROW_SHAFT_M = 0.04
 ARROW_HEAD_M = 0.08
@@ -122,4 +122,4 @@ class CmdVelMarker:
 def main():
     init_node('cmd_vel_marker')
     CmdVelMarker()
-    spin()
+    rospy.spin()

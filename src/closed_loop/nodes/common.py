@@ -70,15 +70,6 @@ class Publisher(rospy.Publisher):
                 raise
 
 
-def spin():
-    """``rospy.spin()``, but over as soon as the node is shut down (rospy's looks every 0.5 s of wall time: a graph
-    brought down after each episode waits for its slowest node)."""
-    done = threading.Event()
-    rospy.on_shutdown(done.set)
-    while not done.wait(1.0) and not rospy.is_shutdown():
-        pass
-
-
 def join_launch(name, launch, wait_s):
     """Join, as an anonymous node without signal handlers, the graph that ``launch`` (the subprocess.Popen
     of a roslaunch) brings up. True once joined; False if no master came within ``wait_s`` s or the launch

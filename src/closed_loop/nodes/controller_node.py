@@ -19,8 +19,8 @@ from closed_loop import robot_model
 from closed_loop.commands import CommandError
 from closed_loop.controllers import STOP, Context, ControllerError, Log, Odom, controller_class
 from closed_loop.geometry import Pose2D, quaternion_yaw
-from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, Publisher, StopsOnShutdown, frame_id, goal_param,
-                                      init_node, load_settings, robot_geometry, spin, stamp_to_sec)
+from closed_loop.nodes.common import (LOG_PERIOD_S, LiveSettings, Publisher, StopsOnShutdown, frame_id,
+                                      goal_param, init_node, load_settings, robot_geometry, stamp_to_sec)
 from closed_loop.nodes.conversions import connected_publishers, message_callerid, scan_from_msg, twist
 from closed_loop.nodes.drawing_messages import PUBLICATIONS, to_message
 from closed_loop.sources import SourceCheck
@@ -279,4 +279,4 @@ def main(name):
     cls = controller_class(name)
     init_node(name)
     ControllerNode(cls)
-    spin()
+    rospy.spin()

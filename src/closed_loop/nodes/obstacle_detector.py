@@ -5,8 +5,7 @@ import rospy
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float32
 
-from closed_loop.nodes.common import (LOG_PERIOD_S, LaserMounting, LiveSettings, Publisher, init_node, load_settings,
-                                      spin)
+from closed_loop.nodes.common import LOG_PERIOD_S, LaserMounting, LiveSettings, Publisher, init_node, load_settings
 from closed_loop.nodes.conversions import scan_from_msg
 from closed_loop.control.scan import (SECTOR_CENTRES_RAD, DetectorSettings, ScanError, describe_reading,
                               nearest, sector_readings)
@@ -94,4 +93,4 @@ class ObstacleDetector:
 def main():
     init_node('obstacle_detector')
     ObstacleDetector()
-    spin()
+    rospy.spin()

@@ -13,7 +13,7 @@ from std_msgs.msg import Float32, String, UInt32
 from closed_loop.batch.judge import Judge, JudgeSettings, StartSettings
 from closed_loop.geometry import quaternion_yaw
 from closed_loop.nodes import graph_ready
-from closed_loop.nodes.common import Publisher, goal_param, init_node, load_settings, spin, stamp_to_sec
+from closed_loop.nodes.common import Publisher, goal_param, init_node, load_settings, stamp_to_sec
 from closed_loop.sim.simulation import SimSettings
 
 #: A command older than this (s, simulated) is no longer the base's: its watchdog has braked it to zero.
@@ -136,4 +136,4 @@ def write_whole(path, text):
 def main():
     init_node('scenario_judge')
     ScenarioJudge()
-    spin()
+    rospy.spin()

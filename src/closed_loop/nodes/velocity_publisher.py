@@ -6,7 +6,7 @@ from geometry_msgs.msg import Twist
 from std_srvs.srv import Trigger, TriggerResponse
 
 from closed_loop.commands import STOP, PublisherSettings, command_for
-from closed_loop.nodes.common import Publisher, init_node, load_settings, spin
+from closed_loop.nodes.common import Publisher, init_node, load_settings
 from closed_loop.nodes.conversions import twist_from_command
 
 # How often the steady "Publishing: ..." line may repeat in the log (s).
@@ -82,4 +82,4 @@ class VelocityPublisher:
 def main():
     init_node('velocity_publisher')
     VelocityPublisher()
-    spin()
+    rospy.spin()

@@ -5,7 +5,7 @@ from sensor_msgs.msg import Image
 from std_msgs.msg import Bool, UInt32
 
 from closed_loop.image_encoding import ImageEncodingError, array_to_image, image_to_array
-from closed_loop.nodes.common import Publisher, init_node, load_settings, spin
+from closed_loop.nodes.common import Publisher, init_node, load_settings
 from closed_loop.control.vision import SUPPORTED_ENCODINGS, VisionError, VisionSettings, detect_red_encoded
 
 #: Socket buffer of the image subscription. rospy's 64 KiB default holds less than one camera
@@ -99,4 +99,4 @@ def main():
     """Start the vision node and serve until shutdown."""
     init_node('vision_node')
     VisionNode()
-    spin()
+    rospy.spin()
