@@ -95,8 +95,7 @@ def startup(root):
     print('   start-up to the first command, the graph kept: %.2f s (median of 3: %s; with the graph\'s own start: '
           '%.2f s); target < %.1f s: %s' % (first, ', '.join('%.2f' % f for f in firsts[1:]), firsts[0],
                                              TARGET_STARTUP_S, 'met' if first < TARGET_STARTUP_S else 'NOT met'))
-    print('   verdict to the graph ready for the next episode (its nodes down, the graph as before): %.2f s '
-          '(median of 4; the result is back at once, the teardown goes on beside what comes next)'
+    print('   verdict to the row, the episode\'s nodes down and the graph as before: %.2f s (median of 4)'
           % statistics.median(downs))
     fresh = []
     for _ in range(3):
