@@ -46,14 +46,15 @@ class KeptGraphError(Exception):
 
 
 class KeptGraph:
-    """The runner's side: a keeper (this module, run as a process) and its graph, for the episodes of one worker
-    whose graphs differ only in what the keeper sets for each (``key``: the rest, such as the robot)."""
+    """The runner's side: a keeper (:data:`KEEPER`, a process) and its graph, for the episodes of one worker whose
+    graphs differ only in what the keeper sets for each (``key``: the rest, such as the robot)."""
 
     def __init__(self, key, base_text, env, mark_under):
         """The graph's files go in a temporary folder, removed when it is closed (each episode's folder gets the
         simulator's output of its episode: ``simulator.log``); its processes carry a mark under ``mark_under``
         (the first episode's folder's parent: a sweep waits for what carries a mark under its own at its end)."""
         self.key = key
+        self.closed = False
         self.folder = tempfile.mkdtemp(prefix='closed_loop-kept-graph-')
         self.ending = False                 # an episode's end asked for, its answer not read yet
         base = os.path.join(self.folder, 'base.launch')
@@ -109,8 +110,7 @@ class KeptGraph:
         return answer == 'started'
 
     def end(self):
-        """Have the episode brought down, the graph back to what it was before it; the answer is read before the
-        next episode (:meth:`settle`): the teardown goes on meanwhile."""
+        """Have the episode brought down, the graph back to what it was before it (:meth:`settle` waits for it)."""
         try:
             self.process.stdin.write(b'end\n')
             self.process.stdin.flush()
@@ -130,8 +130,10 @@ class KeptGraph:
         return self.process.poll()
 
     def close(self):
-        if self.process.returncode is not None:
+        """End the graph (the keeper shuts it down as its input closes), and remove its folder."""
+        if self.closed:
             return
+        self.closed = True
         try:
             self.process.stdin.close()
         except OSError:
