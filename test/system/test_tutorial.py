@@ -140,7 +140,9 @@ def test_parts_1_and_2_publish_commands_then_read_the_laser_and_the_camera(learn
     assert page.typed('rosrun closed_loop obstacle_detector') == "the lesson's ObstacleDetector"
     front = learner.start('rostopic echo /obstacle_distance/front')
     assert page.typed('rostopic echo /obstacle_distance/front').startswith('data: 3.0, the wall')
-    assert [round(m["data"], 2) for m in front.wait_messages(3, STEP_S)[:3]] == [3.0] * 3, front.output()
+    # (To the page's decimal: after the reset the robot settles about 5 mm behind its start on some hours, and
+    # creeps back under 1 mm/s for a while: 3.005 m is the page's 3.0, not 3.00.)
+    assert [round(m["data"], 1) for m in front.wait_messages(3, STEP_S)[:3]] == [3.0] * 3, front.output()
     learner.ctrl_c()                                                      # "Ctrl-C everything (the simulator too)"
     learner.start('roslaunch closed_loop sim.launch world:=red_box')
     assert page.typed('roslaunch closed_loop sim.launch world:=red_box') == 'a red box 2 m ahead'
