@@ -63,6 +63,16 @@ def test_past_the_limit_a_grid_is_refused_before_any_combination_is_made(tmp_pat
         sweep_file.load(write(tmp_path, 'name: big\ngrid:\n  seed: {from: 0, to: 1000000000, step: 1}\n'))
 
 
+def test_a_long_check_tells_how_many_checks_are_done(tmp_path, monkeypatch):
+    """Each report counts the checks made so far (never 0 of N once one is done), up to all of them."""
+    monkeypatch.setattr(sweep_file, 'PROGRESS_S', -1.0)          # every check is "long"
+    path = write(tmp_path, 'name: t\nbase: {world: wall}\ngrid:\n  settings.stop_distance: [0.3, 0.4]\n')
+    told = []
+    sweep_file.load(path, lambda done, total: told.append((done, total)))
+    total = told[0][1]
+    assert [done for done, _ in told] == list(range(1, total + 1)) and {t for _, t in told} == {total}
+
+
 def test_each_value_of_a_range_is_checked_at_its_ends(tmp_path):
     path = write(tmp_path, 'name: r\ngrid:\n  settings.stop_distance: {from: 0.1, to: 5.0, step: 0.1}\n')
     with pytest.raises(SweepError) as error:

@@ -284,7 +284,7 @@ def _check(grid, progress):
     for done, assignment in enumerate(itertools.chain(trials, (grid[i][0] for i in combinations))):
         episode_spec(grid.base, assignment, grid.source, cache)
         if progress is not None and time.monotonic() - told > PROGRESS_S:
-            progress(done, total)
+            progress(done + 1, total)
             told = time.monotonic()
 
 
