@@ -2,22 +2,29 @@
 (lockstep, its default) with the stop_on_obstacle node, run once alone and once with ``rostopic echo``,
 ``rostopic hz`` and ``rosbag record`` subscribed from outside the launch, gives the same verdict to the bit;
 the watchers see what was published: every scan 0.1 s of simulated time apart, /clock with no gap, commands,
-and ``rostopic hz`` reports the LIDAR's 10 Hz of simulated time."""
+and ``rostopic hz`` reports the LIDAR's 10 Hz of simulated time. The watched run is also paused mid-way for three
+times the controller's scan_timeout of wall time, and that changes nothing either: in lockstep no node stops the
+robot for wall time that passed (the machine's load would then decide the run)."""
 import json
 import os
 import re
 import signal
 import subprocess
+import threading
+import time
 
 import rosbag
 import rosgraph
 
+from closed_loop.control.decisions import StopSettings
 from conftest import roscore, stop, wait_for  # noqa: F401  (roscore: a fixture)
 
 #: Long enough that the watched run lasts a few seconds of wall time however fast lockstep goes: ``rostopic hz``
 #: prints once a wall second, and only once the messages it heard span a second since its last print.
 TIME_LIMIT_S = 25.0
 WATCHED = ('/scan', '/cmd_vel', '/clock')
+#: Wall time the watched run is held paused mid-way: three times the controller's scan_timeout.
+PAUSE_S = 3 * StopSettings().scan_timeout
 
 
 def scenario(env, tmp_path, name):
@@ -41,6 +48,22 @@ def subscribed(env, topics):
     return all(any(n.startswith(('/rostopic', '/record')) for n in subscribers.get(t, [])) for t in topics)
 
 
+def pause_mid_way(env, tmp_path, paused):
+    """Once the echo has shown the first commands (the robot under way), pause the simulator for PAUSE_S of wall
+    time; ``paused`` gets whether that ended before the verdict (of the run named 'watched')."""
+    def call(service):
+        return subprocess.run(['rosservice', 'call', service], env=env, stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, timeout=30).returncode == 0
+    echo = tmp_path / 'echo.txt'
+    try:
+        wait_for(lambda: echo.read_text().count('linear:') >= 2, 60, 'the first commands echoed')
+        held = call('/sim/pause_physics')
+        time.sleep(PAUSE_S)
+        paused.append(held and call('/sim/unpause_physics') and not (tmp_path / 'watched.json').exists())
+    except AssertionError as error:
+        paused.append(str(error))
+
+
 def test_echo_hz_and_a_bag_watch_a_lockstepped_scenario_and_change_nothing(roscore, tmp_path):
     env = roscore
     alone = scenario(env, tmp_path, 'alone')
@@ -59,7 +82,12 @@ def test_echo_hz_and_a_bag_watch_a_lockstepped_scenario_and_change_nothing(rosco
                                  stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT, start_new_session=True)]
     try:
         wait_for(lambda: subscribed(env, WATCHED), 60, 'rostopic and rosbag subscribed')
+        paused = []
+        pauser = threading.Thread(target=pause_mid_way, args=(env, tmp_path, paused))
+        pauser.start()
         watched = scenario(env, tmp_path, 'watched')
+        pauser.join(60)
+        assert paused == [True], 'the watched run was not paused before its verdict: %s' % paused
         wait_for(lambda: re.search(r'average rate', (tmp_path / 'hz.txt').read_text()), 30, 'a rate from rostopic hz')
         # Ctrl-C to the recorder: its wrapper exits at once, the recorder itself once it has closed the bag.
         os.killpg(watchers[-1].pid, signal.SIGINT)

@@ -11,8 +11,8 @@ from std_msgs.msg import String
 from closed_loop.watchdog import SilenceWatchdog
 from closed_loop.control.guard import GuardSettings, GuardVerdict, filter_command, scan_problem
 from closed_loop.control.scan import scan_points
-from closed_loop.nodes.common import (LiveSettings, Publisher, StopsOnShutdown, frame_id, init_node,
-                                      load_settings, robot_geometry)
+from closed_loop.nodes.common import (LiveSettings, Publisher, StopsOnShutdown, clock_held, frame_id,
+                                      init_node, load_settings, robot_geometry)
 from closed_loop.nodes.conversions import (connected_publishers, message_callerid, scan_from_msg, twist)
 from closed_loop.control.scan import ScanError
 from closed_loop.sources import SourceCheck
@@ -66,7 +66,8 @@ class CmdVelGuard(StopsOnShutdown):
         self._odom_sub = rospy.Subscriber('odom', Odometry, self._on_odom, queue_size=1, tcp_nodelay=True)
         self._cmd_sub = rospy.Subscriber('cmd_vel_in', Twist, self._on_cmd, queue_size=1, tcp_nodelay=True)
         self._timer = rospy.Timer(rospy.Duration(1.0 / s.rate_hz), lambda _e: self._tick(), reset=True)
-        self._watchdog.start()
+        if not clock_held():         # (in lockstep, wall time says nothing of the input's age)
+            self._watchdog.start()
         self._live = LiveSettings(s, self._take_settings)
         rospy.on_shutdown(self._on_shutdown)
 

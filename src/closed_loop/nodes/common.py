@@ -245,6 +245,19 @@ def goal_param():
     return float(goal[0]), float(goal[1])
 
 
+#: The simulator node's name, where its parameters are (sim.launch, scenario.launch, multi_robot.launch, kept graphs).
+SIM_NODE = '/sim'
+
+
+def clock_held():
+    """True where a lockstepped simulator drives this graph's clock (``/use_sim_time`` and the simulator's
+    ``~lockstep``): simulated time then stands still until every node has answered, however long that takes in
+    wall time, and a dead simulator freezes the world with it. A wall-clock silence watchdog would stop the robot
+    for the machine's load, not for stale input, and make the run depend on it: the nodes start theirs only where
+    this is false (their ROS-time checks of stale input stay)."""
+    return bool(rospy.get_param('/use_sim_time', False)) and bool(rospy.get_param(SIM_NODE + '/lockstep', False))
+
+
 def stamp_to_sec(stamp):
     """A ``rospy.Time`` (or ``genpy.Time``) as float seconds."""
     return stamp.secs + stamp.nsecs * 1e-9

@@ -33,6 +33,7 @@ from closed_loop.batch import rerun
 from closed_loop.batch.lockstep import Tap
 from closed_loop.nodes import sensor_messages as to_msgs
 from closed_loop.nodes.drawing_messages import to_message
+from closed_loop.nodes.common import SIM_NODE
 from closed_loop.nodes.conversions import twist
 from closed_loop.sim.profiles import ProfileError, load_profile
 from closed_loop.sim.scheduler import Schedule
@@ -48,7 +49,6 @@ from closed_loop.sim.sensors.world_state import WorldState
 SAMPLED = ((OdometrySensor, to_msgs.odometry_messages), (WheelEncoders, to_msgs.joint_messages),
            (Clearance, to_msgs.clearance_messages), (WorldState, to_msgs.world_messages))
 LATCHED = {'/world_markers', '/tf_static', '/contact_count'}
-SIM_NODE = '/sim'
 FIRST_TIME = rospy.Time(0, 1)
 
 
