@@ -55,6 +55,7 @@ PROGRAMS = {
     'roslaunch': ('python3-roslaunch', 'roslaunch'), 'rosmaster': ('python3-rosmaster', 'rosmaster'),
     'rostest': ('python3-rostest', 'rostest'), 'rosbag': ('python3-rosbag', 'rosbag'),
     'rostopic': ('python3-rostopic', 'rostopic'), 'rosparam': ('python3-rosparam', 'rosparam'),
+    'rosservice': ('python3-rosservice', 'rosservice'),
     'rosrun': ('rosbash', 'rosbash'), 'rospack': ('rospack-tools', 'rospack'), 'dpkg-query': ('dpkg', None), 'openssl': ('openssl', 'openssl'),
 }
 #: Debian's Essential packages, on every Debian system and never removed: provisioning need not name them.
