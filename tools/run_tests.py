@@ -168,9 +168,9 @@ class JobCgroup:
 
 
 def call(cmd, out, name, timeout=None, niceness=0, **kwargs):
-    """Run ``cmd`` (the job ``name``) with its output to ``out`` at ``niceness``; returns (exit status or 'timeout', CPU seconds its
-    processes used: all of them where a cgroup can count them, else it and the descendants it waited for), killed
-    after ``timeout`` s if given."""
+    """Run ``cmd`` (the job ``name``) with its output to ``out`` at ``niceness``; returns (exit status or 'timeout',
+    CPU seconds its processes used: all of them where a cgroup can count them, else it and the descendants it waited
+    for), killed after ``timeout`` s if given."""
     group = JobCgroup(name)
 
     def first():

@@ -19,9 +19,11 @@ asleep for the answer: the master's threads are watched, and the new thread it s
 change in its count of threads); not rosout, which only collects log lines; and the simulator's own threads but
 the one that waits. They are looked up again every ``refresh_s`` of wall time (a node that starts later, a
 respawned one). A node that waits on something outside all these (a server elsewhere) looks idle while it waits:
-the simulator goes on without its answer. A process that stays busy past ``timeout_s`` of wall time is *missed*:
-the wait ends, the instant counts as missed, and that process is not waited for again until it is seen quiet (a
-hung node costs one timeout, not one per instant). A node that sleeps on something that never comes (a service
+the simulator goes on without its answer. A busy process that has *computed* for ``timeout_s`` since the wait began
+(CPU time: a node kept from the CPU by a busy machine is waited for, so the run does not turn on the load), or stayed
+busy for :data:`BACKSTOP` times that of wall time (blocked on a disk, starved for good), is *missed*: the wait ends,
+the instant counts as missed, and that process is not waited for again until it is seen quiet (a hung node costs
+one timeout, not one per instant). A node that sleeps on something that never comes (a service
 that does not answer) is quiet: it simply does not answer, the same way every time.
 
 Pollers: some threads do not wait to be woken but look again on their own, every so often of wall time:
@@ -32,8 +34,9 @@ of a moment when nothing was sent), and ``wait(poll=...)`` is not over until eac
 has looked again after the last thing any other thread did (then the graph is quiet as above).
 """
 import os
-import threading
 import time
+
+from closed_loop.participants import Participants  # noqa: F401  (re-exported: who takes part)
 
 #: States of a thread that is not working: asleep (S), stopped (T, t: SIGSTOP or a debugger), dead (Z, X), idle
 #: kernel thread (I). Running or runnable (R) and in uninterruptible sleep (D: I/O it asked for) are busy.
@@ -54,64 +57,9 @@ POLLER_GIVE_UP_S = 0.1
 SPIN_LOOKS, NAP_S = 30, 0.0002
 #: ``wait(poll=EVERY)``: the pollers of every process.
 EVERY = object()
-
-
-class Participants:
-    """The processes that take part: ``root_pid``'s descendants and ``extra`` pids but ``exclude`` ones (a set, or
-    a callable that gives one, asked at each look-up), and the calling process (``own_pid``) but its calling thread
-    (``own_tid``)."""
-
-    def __init__(self, root_pid, own_pid=None, own_tid=None, extra=(), exclude=()):
-        self.root_pid = root_pid
-        self.own_pid = os.getpid() if own_pid is None else own_pid
-        self.own_tid = threading.get_native_id() if own_tid is None else own_tid
-        self.extra = tuple(extra)
-        self.exclude = exclude if callable(exclude) else frozenset(exclude)
-
-    def pids(self):
-        """The participants' pids now (the calling process among them; the root itself is not)."""
-        children = {}
-        for name in os.listdir('/proc'):
-            if name.isdigit():
-                ppid = _ppid(int(name))
-                if ppid is not None:
-                    children.setdefault(ppid, []).append(int(name))
-        found, todo = set(), [self.root_pid] if self.root_pid else []
-        while todo:
-            for child in children.get(todo.pop(), ()):
-                if child not in found:
-                    found.add(child)
-                    todo.append(child)
-        found.update(pid for pid in self.extra if os.path.exists('/proc/%d' % pid))
-        found -= self.exclude() if callable(self.exclude) else self.exclude
-        found.add(self.own_pid)
-        return found
-
-    def threads(self, pid):
-        """The thread ids of process ``pid`` that take part."""
-        return {int(tid) for tid in os.listdir('/proc/%d/task' % pid)} - {self.own_tid}
-
-    @staticmethod
-    def kernel_threads():
-        """The kernel's softirq threads, where this machine shows them (not inside a PID namespace)."""
-        found = []
-        for name in os.listdir('/proc'):
-            if name.isdigit():
-                try:
-                    with open('/proc/%s/comm' % name) as f:
-                        if f.read().startswith('ksoftirqd/'):
-                            found.append(int(name))
-                except OSError:
-                    pass
-        return found
-
-
-def _ppid(pid):
-    try:
-        with open('/proc/%d/stat' % pid, 'rb') as f:
-            return int(f.read().rsplit(b')', 1)[1].split()[1])
-    except (OSError, ValueError, IndexError):
-        return None
+#: A busy process is missed at the latest after this many times ``timeout_s`` of wall time (the module's doc); past
+#: ``timeout_s`` of wall time, its CPU time is looked at every RECHECK_S (wall s).
+BACKSTOP, RECHECK_S = 10, 0.1
 
 
 def _open(path):
@@ -200,7 +148,8 @@ class Quiescence:
         return self.pollers
 
     def wait(self, poll=None):
-        """True once quiet; False when ``timeout_s`` passed first (a miss: the busy processes are excused).
+        """True once quiet; False when a busy process computed for ``timeout_s`` first, or stayed busy for BACKSTOP
+        times that of wall time (a miss: the busy processes are excused).
         ``poll``: the pids whose pollers must look again, after the last thing any other thread did, before it is
         over (EVERY: every process's, after a clock; None: none; pids: after a message to them, their pollers but
         those that watch the clock)."""
@@ -208,7 +157,8 @@ class Quiescence:
         if now - self._refreshed >= self.refresh_s:
             self._refresh_processes()
             self._refreshed = now
-        deadline = now + self.timeout_s
+        deadline, backstop = now + self.timeout_s, now + BACKSTOP * self.timeout_s
+        first = None                       # the counts when the threads were last listed in this wait
         excused = self.excused
         before = self._last
         check = True                       # whether the thread lists are to be checked
@@ -222,10 +172,13 @@ class Quiescence:
         while True:
             if check and self._threads_changed():      # (a thread started or ended: list them again)
                 self._list_threads()
-                before, waiting, looked, fresh = None, {}, {}, True
+                before, waiting, looked, fresh, first = None, {}, {}, True, None
             check = False
             if before is None or len(before) != len(self._sched):
                 before = _reads(self._sched, 64)
+                first = before
+            elif first is None:
+                first = before
             after = _reads(self._sched, 64)
             moved = self._moved(before, after)
             t = self.clock()
@@ -274,10 +227,14 @@ class Quiescence:
                 return True
             if self.clock() > deadline:
                 states = _reads(self._stat, 48)
-                self.missed += 1
-                excused |= self._busy(before, after, states)
-                self._last = None
-                return False
+                busy = self._busy(before, after, states)
+                if self.clock() < backstop and self._computed(first, after, busy) < self.timeout_s:
+                    deadline = self.clock() + min(self.timeout_s, RECHECK_S)      # (kept from the CPU: wait on)
+                else:
+                    self.missed += 1
+                    excused |= busy
+                    self._last = None
+                    return False
             before = after
             # Look again at once for a little while (a node's answer takes some tens of microseconds), then nap:
             # on a machine with more work than cores, a wait that spins takes the CPU from the nodes it waits for.
@@ -297,6 +254,16 @@ class Quiescence:
         pollers, excused = self.pollers, self.excused
         return any(b != a and key not in pollers and key[0] not in excused
                    for key, b, a in zip(self._keys, before, after))
+
+    def _computed(self, first, counts, pids):
+        """The most CPU time (s) any process of ``pids`` has had between the readings ``first`` and ``counts``."""
+        if first is None or len(first) != len(counts):
+            return 0.0
+        used = {}
+        for key, a, b in zip(self._keys, first, counts):
+            if key[0] in pids and b:
+                used[key[0]] = used.get(key[0], 0) + _run_ns(b) - _run_ns(a)
+        return max(used.values(), default=0) * 1e-9
 
     def _asleep(self, states, only=None):
         """True if every thread (of process ``only``; but those of excused processes) is asleep in ``states``."""
@@ -373,6 +340,12 @@ class Quiescence:
         self._keys = list(self._threads)
         self._stat = [self._threads[key][0] for key in self._keys]
         self._sched = [self._threads[key][1] for key in self._keys]
+
+
+def _run_ns(schedstat):
+    """A thread's time on a CPU (ns) from its schedstat line (0 for one not there)."""
+    fields = schedstat.split()
+    return int(fields[0]) if fields else 0
 
 
 def _slices(schedstat):

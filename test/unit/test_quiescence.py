@@ -119,3 +119,36 @@ def test_a_busy_child_is_missed_once_then_not_waited_for_and_a_stop_ends_a_wait(
     finally:
         process.kill()
         process.wait()
+
+
+#: Reads a line, computes for 30 ms of its own CPU time, answers it.
+COMPUTES = textwrap.dedent('''
+    import sys, time
+    for line in sys.stdin:
+        end = time.process_time() + 0.03
+        while time.process_time() < end:
+            pass
+        sys.stdout.write(line)
+        sys.stdout.flush()
+''')
+
+
+
+def test_a_child_slow_in_wall_time_but_not_computing_long_is_waited_for_not_missed(gate):
+    """A machine so busy that wall time runs 20 times faster than the child's CPU time (the gate's clock, made so):
+    the child's 30 ms of work take 0.6 s of that, past the 0.5 s timeout, and it is waited for (it computed less
+    than the timeout), not missed: a busy machine does not change the run. A child that computes past it is missed
+    (test_a_busy_child_is_missed_once...)."""
+    process = child(COMPUTES)
+    origin = time.monotonic()
+    g = gate(timeout_s=0.5, clock=lambda: origin + 20 * (time.monotonic() - origin))
+    try:
+        assert g.wait()                    # (the child started, and reads its input)
+        started = g.clock()
+        process.stdin.write('go\n')
+        assert g.wait() and g.missed == 0
+        took = g.clock() - started
+        assert ready(process) == 'go\n' and took > 0.5, took
+    finally:
+        process.kill()
+        process.wait()

@@ -22,7 +22,8 @@ timer's tick, directly or through other nodes). From then on part 2 comes only a
 ten of them a second, not a hundred. A timer that commanded nothing in that time, or one that starts later off
 those steps, fires at the next ``/clock`` instead, up to a sensor period late, the same way every time.
 ``~clock_every_step`` keeps part 2 at every step.
-A node that stays busy past ``~lockstep_timeout`` of wall time makes the instant *missed*: the count goes out on
+A node that computes past ``~lockstep_timeout`` of CPU time at one instant (``closed_loop.quiescence``) makes it
+*missed*: the count goes out on
 ``~missed_ticks`` (std_msgs/UInt32, latched), and the base acts on the commands it has.
 
 What a node of the launch is sent goes out in the simulator's own thread, before the wait that follows (rospy's
@@ -240,7 +241,7 @@ def run(node):
     gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
                       stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
     sim = None
-    rospy.loginfo('sim_node: lockstep: each instant waits for the graph (at most %g s of wall time), commands '
+    rospy.loginfo('sim_node: lockstep: each instant waits for the graph (a node computing at most %g s), commands '
                   'reach the wheels %s later', s.lockstep_timeout, _steps(command_delay_steps(s.command_delay,
                                                                                               node.sim.dt_s)))
     try:
@@ -310,7 +311,7 @@ def run(node):
                 missed = gate.missed
                 missed_pub.publish(UInt32(missed))
                 rospy.logwarn_throttle(10.0, 'sim_node: lockstep: %d instant%s missed (a node busy for over %g s '
-                                       'of wall time)' % (missed, '' if missed == 1 else 's', s.lockstep_timeout))
+                                       'of CPU time)' % (missed, '' if missed == 1 else 's', s.lockstep_timeout))
             queued.extend((k + delay, port, command) for port, command in heard if command is not None)
             while queued and queued[0][0] <= k:
                 _, port, command = queued.popleft()

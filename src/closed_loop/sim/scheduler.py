@@ -24,9 +24,10 @@ class SchedulingSettings:
     lockstep: bool = param(False, '', 'simulated time goes on only once every node of the launch has done all that '
                            'the last instant (its sensor messages, then /clock) asked of it, as fast as they answer; '
                            'real_time_factor is then not used (docs/own_controller.md, "Lockstep")')
-    lockstep_timeout: float = param(2.0, 's', 'in lockstep, the wall time a node may stay busy at one instant; '
-                                    'then the instant counts as missed (~missed_ticks), the base acts on the commands '
-                                    'it has, and that node is not waited for until it is next seen idle',
+    lockstep_timeout: float = param(2.0, 's', 'in lockstep, the CPU time a node may compute for at one instant (a '
+                                    'node kept from the CPU by a busy machine is waited for, up to 10 times this of '
+                                    'wall time); then the instant counts as missed (~missed_ticks), the base acts on '
+                                    'the commands it has, and that node is not waited for until it is next seen idle',
                                     minimum=0.01, maximum=60.0)
     clock_every_step: bool = param(False, '', 'in lockstep, /clock goes out at every physics step; false: at every step '
                                    'with sensor messages, and at the others only if a node commanded at one in the '
