@@ -228,7 +228,7 @@ class Quiescence:
             if self.clock() > deadline:
                 states = _reads(self._stat, 48)
                 busy = self._busy(before, after, states)
-                if self.clock() < backstop and self._computed(first, after, busy) < self.timeout_s:
+                if self.clock() < backstop and self._computed(first, after, busy - excused) < self.timeout_s:
                     deadline = self.clock() + min(self.timeout_s, RECHECK_S)      # (kept from the CPU: wait on)
                 else:
                     self.missed += 1
