@@ -150,8 +150,8 @@ def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_p
     with open(os.path.join(stubborn['logs'], 'graph.log')) as f:
         text = f.read()
     assert 'escalating to SIGTERM' in text and 'escalating to SIGKILL' in text, text[-2000:]
-    # The node that hangs is waited for once (2 s of wall time), then the scenario goes on without it: the base
-    # stops with no command, and the verdict counts the instant missed.
+    # The node that hangs is waited for once (2 s of its CPU time: it spins), then the scenario goes on without it:
+    # the base stops with no command, and the verdict counts the instant missed.
     hung = by_case['{"launch": "fixture_controllers/launch/misbehaving.launch", "args": {"how": "hang"}}']
     assert hung['outcome'] == 'stopped' and not hung['error'] and hung['missed_ticks'] == '1', hung
     assert hung['why'].endswith("; 1 instant missed (a node busy past the simulator's lockstep_timeout)"), hung
