@@ -34,6 +34,7 @@ import xml.etree.ElementTree as ET
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), '..'))
 sys.path.insert(0, os.path.join(ROOT, 'src'))
 from closed_loop import netenv  # noqa: E402  (the graphs these start stay on loopback)
+from job_cgroup import LEFT, JobCgroup  # noqa: E402  (tools/: a job's CPU, all its processes)
 OUT = os.path.join(ROOT, 'test_output')
 # A rostest file that hangs past this is killed and counted failed; each file also has its own time-limit.
 ROSTEST_HANG_LIMIT_S = 300
@@ -110,61 +111,6 @@ GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreeme
 #: System test files that follow a docs page in real time, one command after another (minutes, mostly waiting on
 #: simulated time): they start with the first jobs, so that the run does not wait for them at its end.
 LONG = ('test_tutorial',)
-
-
-#: Where a job's every process can be counted: a cgroup of its own under one of these (cgroup v1's cpuacct, or
-#: cgroup v2), where this machine lets the tests make one (as root). Its processes' descendants stay in it wherever
-#: they are reparented (a sweep's Dask workers, a kept graph's simulator), which the job's own count (rusage: the
-#: descendants it waited for) leaves out: for a sweep of graph episodes, less than half of what it took.
-CGROUP_ROOTS = (('/sys/fs/cgroup/cpuacct', 'cpuacct.usage', 1e-9), ('/sys/fs/cgroup', 'cpu.stat', 1e-6))
-
-
-class JobCgroup:
-    """A cgroup for one job's processes, or none where it cannot be made (then ``seconds()`` is None)."""
-
-    def __init__(self, name):
-        self.path = self.usage = None
-        for root, usage, unit in CGROUP_ROOTS:
-            if os.path.isfile(os.path.join(root, usage)) or os.path.isfile(os.path.join(root, 'cgroup.controllers')):
-                path = os.path.join(root, 'closed_loop_test-%d-%s' % (os.getpid(), name))
-                try:
-                    os.makedirs(path, exist_ok=True)
-                except OSError:
-                    continue
-                if os.path.isfile(os.path.join(path, usage)):
-                    self.path, self.usage, self.unit = path, usage, unit
-                    return
-                os.rmdir(path)
-
-    def enter(self):
-        """In the job's first process, before it runs the job: join the cgroup (nothing where there is none)."""
-        if self.path is not None:
-            try:
-                with open(os.path.join(self.path, 'cgroup.procs'), 'w') as f:
-                    f.write(str(os.getpid()))
-            except OSError:
-                pass
-
-    def seconds(self):
-        """CPU seconds of every process that was in the cgroup; None without one."""
-        if self.path is None:
-            return None
-        try:
-            with open(os.path.join(self.path, self.usage)) as f:
-                text = f.read()
-        except OSError:
-            return None
-        value = text.split()[0] if self.usage == 'cpuacct.usage' else \
-            next((line.split()[1] for line in text.splitlines() if line.startswith('usage_usec')), None)
-        return None if value is None else int(value) * self.unit
-
-    def close(self):
-        """Remove the cgroup (left where a process of the job outlived it)."""
-        if self.path is not None:
-            try:
-                os.rmdir(self.path)
-            except OSError:
-                pass
 
 
 def call(cmd, out, name, timeout=None, niceness=0, **kwargs):
@@ -384,6 +330,8 @@ def main():
     for name in failures:
         print('FAILED: %s' % name)
     busy_after, wall_s = machine_busy_s(), time.monotonic() - started
+    for group in [LEFT.pop() for _ in range(len(LEFT))]:
+        group.close(tries=10)
     if busy_before is not None and busy_after is not None:
         print('== the machine was busy %.0f CPU-s in the %d min %02d s of the tests (%.2f of its %d cores)'
               % (busy_after - busy_before, wall_s // 60, wall_s % 60, (busy_after - busy_before) / wall_s,
