@@ -15,16 +15,18 @@ from closed_loop.quiescence import EVERY, Participants, Quiescence
 if not os.path.exists('/proc/self/task/%d/schedstat' % os.getpid()):
     pytest.skip('this kernel shows no schedstat', allow_module_level=True)
 
-#: Reads a line, computes for a few ms, answers it.
-ANSWERS = textwrap.dedent('''
+#: Reads a line, computes until ``time.CLOCK()`` has gone on by SECONDS, answers it.
+WORKS = textwrap.dedent('''
     import sys, time
     for line in sys.stdin:
-        end = time.perf_counter() + 0.003
-        while time.perf_counter() < end:
+        end = time.CLOCK() + SECONDS
+        while time.CLOCK() < end:
             pass
         sys.stdout.write(line)
         sys.stdout.flush()
 ''')
+#: Reads a line, computes for a few ms, answers it.
+ANSWERS = WORKS.replace('CLOCK', 'perf_counter').replace('SECONDS', '0.003')
 #: A thread that looks at a file every millisecond (as roscpp's timers look at the clock) and answers each new
 #: content; nothing wakes it.
 POLLS = textwrap.dedent('''
@@ -122,15 +124,7 @@ def test_a_busy_child_is_missed_once_then_not_waited_for_and_a_stop_ends_a_wait(
 
 
 #: Reads a line, computes for 30 ms of its own CPU time, answers it.
-COMPUTES = textwrap.dedent('''
-    import sys, time
-    for line in sys.stdin:
-        end = time.process_time() + 0.03
-        while time.process_time() < end:
-            pass
-        sys.stdout.write(line)
-        sys.stdout.flush()
-''')
+COMPUTES = WORKS.replace('CLOCK', 'process_time').replace('SECONDS', '0.03')
 
 
 
