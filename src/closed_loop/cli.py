@@ -25,3 +25,16 @@ class ShowDefaults(argparse.HelpFormatter):
 def parser(prog, description, **kwargs):
     """An ``argparse.ArgumentParser`` whose ``--help`` gives each option's default (:class:`ShowDefaults`)."""
     return argparse.ArgumentParser(prog=prog, description=description, formatter_class=ShowDefaults, **kwargs)
+
+
+def interrupted(error):
+    """Whether ``error`` is Ctrl-C, or an error a library raised while Ctrl-C unwound it: a KeyboardInterrupt
+    inside a ``with condition:`` (Dask's ``as_completed`` waiting) can leave ``RuntimeError: cannot release
+    un-acquired lock``, whose ``__context__`` is the KeyboardInterrupt."""
+    seen = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__context__
+    return False

@@ -1,9 +1,14 @@
 #!/usr/bin/env python3
 """Killing the controller outright (SIGKILL: no goodbye zero) while the robot drives: the simulator's
-command watchdog brakes the robot to rest within cmd_vel_timeout plus braking, on ground truth."""
+command watchdog brakes the robot to rest within cmd_vel_timeout plus braking, on ground truth.
+
+The kill's instant in simulated time is pinned by pausing the simulator around it: this test's own view of the
+clock lags the simulator's by however long it waited for a core, which on a loaded machine moved the deadline
+earlier than the watchdog's (a robot at 5.2 mm/s, braking, judged moving)."""
 import os
 import signal
 import sys
+import time
 import unittest
 import xmlrpc.client
 
@@ -11,6 +16,7 @@ import rosgraph
 import rosnode
 import rospy
 import rostest
+from std_srvs.srv import Empty
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import harness  # noqa: E402
@@ -21,6 +27,19 @@ CMD_VEL_TIMEOUT_S = SimSettings().cmd_vel_timeout   # sim_node's defaults, from 
 MAX_LINEAR_ACCEL_MPS2 = SimSettings().max_linear_accel
 CONTROL_PERIOD_S = 1.0 / StopSettings().rate_hz  # the last command may be up to one period old at the kill
 SLACK_S = 0.15
+QUIET_WALL_S = 0.5  # no ground truth and no clock tick for this long: the paused simulator has said its last
+
+
+def paused_at(truth):
+    """Pauses the simulator and returns its simulated time, once everything it sent before the pause is heard."""
+    rospy.ServiceProxy('/sim/pause_physics', Empty)()
+    clock = None
+    while True:
+        time.sleep(QUIET_WALL_S)
+        now = rospy.get_time()
+        if now == clock and time.monotonic() - truth.received_wall > QUIET_WALL_S:
+            return max(now, truth.msg.header.stamp.to_sec())
+        clock = now
 
 
 class KillController(unittest.TestCase):
@@ -31,8 +50,9 @@ class KillController(unittest.TestCase):
         speed = moving.twist.twist.linear.x
         api = rosnode.get_api_uri(rosgraph.Master(rospy.get_name()), '/stop_on_obstacle')
         _, _, pid = xmlrpc.client.ServerProxy(api).getPid('/kill_controller_test')
+        killed = paused_at(truth)
         os.kill(pid, signal.SIGKILL)
-        killed = rospy.get_time()
+        rospy.ServiceProxy('/sim/unpause_physics', Empty)()
         harness.sim_sleep(2.0)
         deadline = killed + CMD_VEL_TIMEOUT_S + speed / MAX_LINEAR_ACCEL_MPS2 + SLACK_S
         after = [m for m in truth.all if m.header.stamp.to_sec() > deadline]

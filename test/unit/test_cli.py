@@ -1,11 +1,12 @@
-"""Every command-line program's --help gives each option's default (closed_loop.cli), and a sweep is run by the
-name of one the package ships."""
+"""Every command-line program's --help gives each option's default (closed_loop.cli), a sweep is run by the
+name of one the package ships, and Ctrl-C is known as Ctrl-C."""
 import argparse
 import importlib
 import os
 
 import pytest
 
+from closed_loop import cli
 from closed_loop.batch import sweep, sweep_file
 
 #: (module, its main function, arguments): episode_bag is a node (rosbag, rospy), imported only where ROS is.
@@ -51,3 +52,46 @@ def test_a_shipped_sweep_is_run_by_its_name_and_an_unknown_name_lists_them():
     with pytest.raises(sweep_file.SweepError) as error:
         sweep_file.resolve('no_such_sweep')
     assert "'no_such_sweep': no such sweep file" in str(error.value) and 'stop_thresholds' in str(error.value)
+
+
+def _raised_while_interrupted():
+    try:
+        try:
+            raise KeyboardInterrupt
+        finally:
+            raise RuntimeError('cannot release un-acquired lock')
+    except RuntimeError as error:
+        return error
+
+
+def test_ctrl_c_is_an_interrupt_also_when_a_library_raised_while_it_unwound():
+    import threading
+    assert cli.interrupted(KeyboardInterrupt())
+    assert cli.interrupted(_raised_while_interrupted())
+    # The error CPython's threading gives when a KeyboardInterrupt lands inside "with condition:" -- as a real one.
+    lock = threading.Lock()
+    try:
+        try:
+            with lock:
+                raise KeyboardInterrupt
+        finally:
+            lock.release()
+    except RuntimeError as error:
+        assert cli.interrupted(error)
+    else:
+        raise AssertionError('releasing an unlocked lock did not raise')
+
+
+def test_other_errors_are_not_interrupts():
+    assert not cli.interrupted(RuntimeError('cannot release un-acquired lock'))
+    try:
+        try:
+            raise ValueError('bad')
+        finally:
+            raise RuntimeError('then this')
+    except RuntimeError as error:
+        assert not cli.interrupted(error)
+    looped = RuntimeError('a')
+    looped.__context__ = RuntimeError('b')
+    looped.__context__.__context__ = looped
+    assert not cli.interrupted(looped)

@@ -300,7 +300,9 @@ def main(argv=None):
     except sweep_file.SweepError as error:
         print('search: %s' % error, file=sys.stderr)
         return 2
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, RuntimeError) as error:
+        if not cli.interrupted(error):
+            raise
         print('\nsearch: interrupted; the rows done are kept: run again with --resume to go on', file=sys.stderr)
         return 130
     sweep_report.report(sweep_file.Sweep(search.name, search.keys, [], None, search.report, search.text), rows,

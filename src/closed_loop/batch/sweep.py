@@ -353,7 +353,9 @@ def run_command(prog, make, output, args, preface=None):
     except sweep_file.SweepError as error:
         print('%s: %s' % (prog, error), file=sys.stderr)
         return 2, None, None
-    except KeyboardInterrupt:
+    except (KeyboardInterrupt, RuntimeError) as error:
+        if not cli.interrupted(error):
+            raise
         print('\n%s: interrupted; the rows done are kept: run again with --resume to finish' % prog, file=sys.stderr)
         return 130, None, None
     except OSError as error:
