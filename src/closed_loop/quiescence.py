@@ -53,8 +53,12 @@ CLOCK_POLLERS_SHARE = 0.9
 #: A poller not seen to look again for this long (wall s) is one no more (it had run for another reason while it
 #: was watched, or what it waits for now wakes it): it is not waited for again.
 POLLER_GIVE_UP_S = 0.1
-#: A wait looks again at once (yielding the CPU) this many times, then naps NAP_S (wall s) between looks.
-SPIN_LOOKS, NAP_S = 30, 0.0002
+#: A wait looks again at once (yielding the CPU) up to SPIN_LOOKS times within SPIN_S (wall s), then naps between
+#: looks: NAP_S at first, then NAP_SHARE of how long it has waited so far, at most NAP_MAX_S. A node's answer takes
+#: some tens of microseconds, and the spin finds it; a long wait (on a machine with more work than cores, where the
+#: nodes wait for a CPU) looks a few dozen times, not thousands, each look a read of every thread's /proc files,
+#: and leaves the CPU to the nodes it waits for. When the graph is seen quiet is the same either way: only later.
+SPIN_LOOKS, SPIN_S, NAP_S, NAP_SHARE, NAP_MAX_S = 30, 0.005, 0.0002, 0.1, 0.01
 #: ``wait(poll=EVERY)``: the pollers of every process.
 EVERY = object()
 #: A busy process is missed at the latest after this many times ``timeout_s`` of wall time (the module's doc); past
@@ -236,13 +240,13 @@ class Quiescence:
                     self._last = None
                     return False
             before = after
-            # Look again at once for a little while (a node's answer takes some tens of microseconds), then nap:
-            # on a machine with more work than cores, a wait that spins takes the CPU from the nodes it waits for.
+            # Look again at once for a little while, then nap, longer the longer the wait (SPIN_LOOKS).
             looks += 1
-            if looks < SPIN_LOOKS:
+            waited = self.clock() - now
+            if looks < SPIN_LOOKS and waited < SPIN_S:
                 os.sched_yield()
             else:
-                time.sleep(NAP_S)
+                time.sleep(min(NAP_MAX_S, max(NAP_S, NAP_SHARE * waited)))
 
     def _moved(self, before, after, only=None):
         """True if a thread ran between the two readings: but a poller (it runs every few ms anyway) and a thread of
