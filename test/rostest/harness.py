@@ -51,8 +51,13 @@ class Latest:
             if msg is not None and (predicate is None or predicate(msg)):
                 return msg
             time.sleep(0.01)
-        raise AssertionError('no %s on %s within %g s' % ('matching message' if predicate else 'message',
-                                                         self.sub.name, timeout_s))
+        with self._lock:
+            msg = self.msg
+        header = getattr(msg, 'header', None)
+        last = ('no message at all' if msg is None else
+                'the last stamped %.3f s' % header.stamp.to_sec() if header is not None else 'the last did not match')
+        raise AssertionError('no %s on %s within %g s (%s, simulated time now %.3f s)' % (
+            'matching message' if predicate else 'message', self.sub.name, timeout_s, last, rospy.get_time()))
 
 
 class GroundTruth(Latest):

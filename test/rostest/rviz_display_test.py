@@ -25,6 +25,8 @@ import harness  # noqa: E402
 from closed_loop.nodes.screen import ScreenError, VirtualScreen  # noqa: E402
 
 MOVED_M = 0.5
+MOVE_WAIT_S = 120.0         # wall seconds for the launch to start and the robot to move (a bound that catches a hang:
+                            # at the lowest CPU priority beside make test's other jobs, 60 s was once too few)
 DRAW_WAIT_S = 45.0          # wall seconds rviz has to draw everything once the robot has moved (a loaded
                             # 2-core machine starts rviz slowly; the screen is read again each second)
 BACKGROUND = (48, 48, 48)   # rviz/closed_loop.rviz's background colour
@@ -152,7 +154,7 @@ class RvizDisplay(unittest.TestCase):
                 launch = subprocess.Popen(['roslaunch', 'closed_loop'] + command, stdout=log,
                                           stderr=subprocess.STDOUT, env=env, start_new_session=True)
                 truth = harness.GroundTruth()
-                truth.wait(timeout_s=60, predicate=lambda m: m.pose.pose.position.x > moved_m)
+                truth.wait(timeout_s=MOVE_WAIT_S, predicate=lambda m: m.pose.pose.position.x > moved_m)
                 deadline = time.monotonic() + DRAW_WAIT_S
                 rgb = screen.screenshot()
                 while missing(rgb) and time.monotonic() < deadline:
