@@ -54,6 +54,19 @@ class Participants:
         return found
 
 
+def name_of(pid):
+    """A process as a log line names it: a ROS node's name (its ``__name:=`` argument) or its program's, and its
+    pid."""
+    try:
+        with open('/proc/%d/cmdline' % pid, 'rb') as f:
+            args = [a.decode(errors='replace') for a in f.read().split(b'\0') if a]
+    except OSError:
+        args = []
+    node = next((a[len('__name:='):] for a in args if a.startswith('__name:=')), None)
+    program = next((os.path.basename(a) for a in args[1:2] if not a.startswith('-')), None) if args else None
+    return '%s (pid %d)' % (node or program or (os.path.basename(args[0]) if args else 'a process gone'), pid)
+
+
 def _ppid(pid):
     try:
         with open('/proc/%d/stat' % pid, 'rb') as f:

@@ -36,7 +36,7 @@ has looked again after the last thing any other thread did (then the graph is qu
 import os
 import time
 
-from closed_loop.participants import Participants  # noqa: F401  (re-exported: who takes part)
+from closed_loop.participants import Participants, name_of  # noqa: F401  (Participants re-exported: who takes part)
 
 #: States of a thread that is not working: asleep (S), stopped (T, t: SIGSTOP or a debugger), dead (Z, X), idle
 #: kernel thread (I). Running or runnable (R) and in uninterruptible sleep (D: I/O it asked for) are busy.
@@ -104,6 +104,7 @@ class Quiescence:
         self.clock = clock
         self.missed = 0
         self.excused = set()         # pids missed and not seen quiet since
+        self.last_miss = None        # (pids busy, starved) of the last miss: starved by the wall-time backstop
         self._kernel = Participants.kernel_threads()
         self._processes = {}         # pid -> (its stat fd, its count of threads when listed)
         self._threads = {}           # (pid, tid) -> (stat fd, schedstat fd)
@@ -121,9 +122,20 @@ class Quiescence:
 
     def restart(self):
         """A new episode (a kept graph's): nothing missed, no poller known, the participants looked up again now."""
-        self.missed, self.excused = 0, set()
+        self.missed, self.excused, self.last_miss = 0, set(), None
         self.pollers, self.clock_pollers = set(), set()
         self._refreshed, self._last = -float('inf'), None
+
+    def why_last_miss(self):
+        """The last miss in words: which processes were busy, and by which rule they were missed."""
+        if self.last_miss is None:
+            return 'none'
+        pids, starved = self.last_miss
+        who = ', '.join(name_of(pid) for pid in pids) or 'a process gone'
+        if starved:
+            return '%s busy for %g s of wall time without computing %g s (kept from the CPU, or blocked)' % (
+                who, BACKSTOP * self.timeout_s, self.timeout_s)
+        return '%s computing for over %g s of CPU time' % (who, self.timeout_s)
 
     def find_pollers(self, window_s=POLLERS_WINDOW_S):
         """Look at the participants for ``window_s`` of wall time, while nothing is sent to them, in bins of
@@ -232,10 +244,14 @@ class Quiescence:
             if self.clock() > deadline:
                 states = _reads(self._stat, 48)
                 busy = self._busy(before, after, states)
-                if self.clock() < backstop and self._computed(first, after, busy - excused) < self.timeout_s:
+                starved = self.clock() >= backstop
+                used = self._computed(first, after, busy - excused)
+                if not starved and max(used.values(), default=0.0) < self.timeout_s:
                     deadline = self.clock() + min(self.timeout_s, RECHECK_S)      # (kept from the CPU: wait on)
                 else:
                     self.missed += 1
+                    computed = [pid for pid, seconds in used.items() if seconds >= self.timeout_s]
+                    self.last_miss = (tuple(sorted(computed if not starved and computed else busy - excused)), starved)
                     excused |= busy
                     self._last = None
                     return False
@@ -260,14 +276,14 @@ class Quiescence:
                    for key, b, a in zip(self._keys, before, after))
 
     def _computed(self, first, counts, pids):
-        """The most CPU time (s) any process of ``pids`` has had between the readings ``first`` and ``counts``."""
+        """{pid: the CPU time (s) it has had between the readings ``first`` and ``counts``} of ``pids``."""
         if first is None or len(first) != len(counts):
-            return 0.0
+            return {}
         used = {}
         for key, a, b in zip(self._keys, first, counts):
             if key[0] in pids and b:
-                used[key[0]] = used.get(key[0], 0) + _run_ns(b) - _run_ns(a)
-        return max(used.values(), default=0) * 1e-9
+                used[key[0]] = used.get(key[0], 0.0) + (_run_ns(b) - _run_ns(a)) * 1e-9
+        return used
 
     def _asleep(self, states, only=None):
         """True if every thread (of process ``only``; but those of excused processes) is asleep in ``states``."""

@@ -9,6 +9,7 @@ import glob
 import json
 import math
 import os
+import re
 import subprocess
 import xml.etree.ElementTree as ET
 
@@ -156,4 +157,9 @@ def test_what_goes_wrong_is_a_clear_row_and_the_sweep_goes_on(fixture_env, tmp_p
     assert hung['outcome'] == 'stopped' and not hung['error'] and hung['missed_ticks'] == '1', hung
     assert hung['why'].endswith("; 1 instant missed (a node busy past the simulator's lockstep_timeout)"), hung
     assert 1.0 < float(hung['time_s']) < 5.0 and 0.1 < float(hung['final_x']) < 1.0, hung
+    # The simulator's warning names the node and the rule (it computed for the timeout), not the others busy then.
+    with open(os.path.join(hung['logs'], 'simulator.log')) as f:
+        text = f.read()
+    assert re.search(r'lockstep: 1 instant missed \(the last: misbehaving \(pid \d+\) computing for over 2 s of CPU '
+                     r'time\)', text), text[-2000:]
     assert graph_leftovers(tmp_path / 'out') == {'processes': [], 'listening': []}

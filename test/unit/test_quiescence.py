@@ -10,7 +10,7 @@ import time
 
 import pytest
 
-from closed_loop.quiescence import EVERY, Participants, Quiescence
+from closed_loop.quiescence import EVERY, Participants, Quiescence, name_of
 
 if not os.path.exists('/proc/self/task/%d/schedstat' % os.getpid()):
     pytest.skip('this kernel shows no schedstat', allow_module_level=True)
@@ -114,6 +114,10 @@ def test_a_busy_child_is_missed_once_then_not_waited_for_and_a_stop_ends_a_wait(
         started = time.monotonic()
         assert not g.wait()
         assert g.missed == 1 and process.pid in g.excused and time.monotonic() - started >= 0.3
+        # Named, and by the rule that missed it: it computed for the timeout.
+        assert g.last_miss == ((process.pid,), False), g.last_miss
+        assert 'python3 (pid %d)' % process.pid in g.why_last_miss() and 'computing for over 0.3 s of CPU time' in \
+            g.why_last_miss(), g.why_last_miss()
         assert g.wait() and g.missed == 1
         stopped = gate(timeout_s=60.0, stopping=lambda: True)
         started = time.monotonic()
@@ -126,6 +130,35 @@ def test_a_busy_child_is_missed_once_then_not_waited_for_and_a_stop_ends_a_wait(
 #: Reads a line, computes for 30 ms of its own CPU time, answers it.
 COMPUTES = WORKS.replace('CLOCK', 'process_time').replace('SECONDS', '0.03')
 
+
+
+def test_a_child_busy_for_ten_timeouts_of_wall_time_is_missed_as_starved_though_it_computed_less(gate):
+    """The gate's clock 100 times faster than the wall: past BACKSTOP x 0.5 s of it (50 ms of wall time) a spinning
+    child has computed far less than 0.5 s, and is missed by the wall-time backstop, which the miss says."""
+    process = child(SPINS)
+    origin = time.monotonic()
+    g = gate(timeout_s=0.5, clock=lambda: origin + 100 * (time.monotonic() - origin))
+    try:
+        assert not g.wait() and g.missed == 1
+        assert process.pid in g.last_miss[0] and g.last_miss[1], g.last_miss
+        assert 'busy for 5 s of wall time without computing 0.5 s' in g.why_last_miss(), g.why_last_miss()
+    finally:
+        process.kill()
+        process.wait()
+
+
+def test_a_ros_node_is_named_by_its_name_argument_and_any_process_by_its_program():
+    node = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)', '__name:=my_node'])
+    script = subprocess.Popen([sys.executable, '-u', '-c', 'import time; time.sleep(60)'])
+    try:
+        time.sleep(0.2)
+        assert name_of(node.pid) == 'my_node (pid %d)' % node.pid
+        assert name_of(script.pid) == '%s (pid %d)' % (os.path.basename(sys.executable), script.pid)
+    finally:
+        for process in (node, script):
+            process.kill()
+            process.wait()
+    assert name_of(node.pid) == 'a process gone (pid %d)' % node.pid
 
 
 def test_a_child_slow_in_wall_time_but_not_computing_long_is_waited_for_not_missed(gate):

@@ -310,8 +310,8 @@ def run(node):
             if gate.missed != missed:
                 missed = gate.missed
                 missed_pub.publish(UInt32(missed))
-                rospy.logwarn_throttle(10.0, 'sim_node: lockstep: %d instant%s missed (a node busy for over %g s '
-                                       'of CPU time)' % (missed, '' if missed == 1 else 's', s.lockstep_timeout))
+                rospy.logwarn_throttle(10.0, 'sim_node: lockstep: %d instant%s missed (the last: %s)' % (
+                    missed, '' if missed == 1 else 's', gate.why_last_miss()))
             queued.extend((k + delay, port, command) for port, command in heard if command is not None)
             while queued and queued[0][0] <= k:
                 _, port, command = queued.popleft()
