@@ -99,8 +99,10 @@ def run_launch_checks(args):
 #: each system test on its own free ports.
 #: (guard_reckless_*: cmd_vel_guard stops the robot where its scan or command is older than half a second of wall
 #: time, as it must: starved beside the others, it stopped a reckless robot at 7 cm, not at the obstacle.)
+#: (rviz_display: rviz drawing in software beside a lockstepped graph that starts, both starved at niceness 19, twice
+#: stood at t = 0.12 s until the test's bound, 60 s and then 120 s of wall time; the cause is not found.)
 ALONE = ('sim_wall', 'loop_wall', 'loop_fast', 'kill_controller', 'kill_sim', 'reconfigure', 'episode_agreement',
-         'guard_reckless_wall', 'guard_reckless_obstacle_course')
+         'guard_reckless_wall', 'guard_reckless_obstacle_course', 'rviz_display')
 SIDE_BY_SIDE = 3
 #: The jobs beside the ALONE ones take only the CPU those leave: a process at niceness 19 weighs 15 against
 #: the 1024 of one at 0 (Linux's CFS), so an ALONE file's nodes run when they wake as on an idle machine.

@@ -4,7 +4,10 @@ command watchdog brakes the robot to rest within cmd_vel_timeout plus braking, o
 
 The kill's instant in simulated time is pinned by pausing the simulator around it: this test's own view of the
 clock lags the simulator's by however long it waited for a core, which on a loaded machine moved the deadline
-earlier than the watchdog's (a robot at 5.2 mm/s, braking, judged moving)."""
+earlier than the watchdog's (a robot at 5.2 mm/s, braking, judged moving). The pause holds simulated time for a
+second or more of wall time, with no scan: kill_controller.test gives the controller its longest scan_timeout, so
+that its own watchdog (wall time) does not stop the robot before the kill (a timer tick run late, in the pause, once
+did: the test then saw the controller's stop, not the simulator's)."""
 import os
 import signal
 import sys
