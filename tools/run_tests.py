@@ -44,7 +44,12 @@ def count_junit(path):
     """(passed, failed, skipped, failed test names) from one JUnit XML file; skipped is a list of 'name: why'."""
     passed = failed = 0
     names, skipped = [], []
-    root = ET.parse(path).getroot()
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as error:
+        # (rosunit opens its file when the test node starts and writes it at the end: one killed at its
+        # time-limit leaves it empty; rostest's own file says so.)
+        return 0, 1, [], ['%s: unreadable (%s)' % (path, error)]
     for case in root.iter('testcase'):
         name = '%s.%s' % (case.get('classname', ''), case.get('name', ''))
         if case.find('failure') is not None or case.find('error') is not None:

@@ -31,8 +31,12 @@ def rostest(env, home, name):
     env = dict(env, ROS_HOME=str(home))
     done = subprocess.run(['rostest', 'fixture_controllers', name], env=env, stdout=subprocess.PIPE,
                           stderr=subprocess.STDOUT, universal_newlines=True, timeout=ROSTEST_TIMEOUT_S)
-    failures = [f.text or '' for path in glob.glob(str(home / 'test_results' / '**' / 'rosunit-*.xml'), recursive=True)
-                for f in ET.parse(path).getroot().iter('failure')]
+    failures = []
+    for path in glob.glob(str(home / 'test_results' / '**' / 'rosunit-*.xml'), recursive=True):
+        try:
+            failures += [f.text or '' for f in ET.parse(path).getroot().iter('failure')]
+        except ET.ParseError as error:      # (a test node killed at its time-limit leaves its file empty)
+            failures.append('%s: unreadable (%s)' % (path, error))
     return done.returncode, done.stdout, failures
 
 

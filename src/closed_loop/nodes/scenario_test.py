@@ -35,9 +35,12 @@ class Scenario(unittest.TestCase):
             box['verdict'] = json.loads(msg.data)
             got.set()
         rospy.Subscriber(topic, String, on_verdict, queue_size=1)
+        rospy.on_shutdown(got.set)       # (killed, or the master gone: end now, not after ~wait)
         wait_s = float(rospy.get_param('~wait', DEFAULT_WAIT_S))
         if not got.wait(wait_s):
             self.fail('no verdict on %s within %g s of wall time' % (topic, wait_s))
+        if 'verdict' not in box:
+            self.fail('shut down before a verdict came on %s' % topic)
         verdict = box['verdict']
         found = problems(verdict, expect)
         if found:
