@@ -328,7 +328,7 @@ def test_exercise_2_tunes_the_thresholds_and_runs_the_shipped_sweeps_and_a_copy(
 
 def test_exercise_3_waits_for_the_walker_then_goes_round_the_wall(learner):
     page = Page('Exercise 3: fuse LIDAR and camera')
-    learner.start('roslaunch closed_loop fusion.launch')
+    launch = learner.start('roslaunch closed_loop fusion.launch')
     assert page.typed('roslaunch closed_loop fusion.launch') == 'world person_crossing: a red walker crosses'
     mode = learner.start('rostopic echo /fusion_controller/mode')
     assert page.typed('rostopic echo /fusion_controller/mode') == 'GOAL_SEEKING, WAITING, GOAL_SEEKING, REACHED'
@@ -336,7 +336,8 @@ def test_exercise_3_waits_for_the_walker_then_goes_round_the_wall(learner):
     assert page.typed('rostopic echo /fusion_controller/belief').startswith('every track: PERSON, STATIC or')
     wait_for(lambda: 'REACHED' in [m['data'] for m in mode.messages()], STEP_S, 'REACHED')
     assert changes([m['data'] for m in mode.messages()]) == ['GOAL_SEEKING', 'WAITING', 'GOAL_SEEKING',
-                                                              'REACHED'], mode.output()[-2000:]
+                                                              'REACHED'], (mode.output()[-2000:],
+                                                                           launch.output()[-4000:])
     assert 'PERSON' in belief.output(), belief.output()[-2000:]
     learner.ctrl_c()
 
