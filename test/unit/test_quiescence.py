@@ -10,6 +10,7 @@ import time
 
 import pytest
 
+from closed_loop.participants import node_name
 from closed_loop.quiescence import EVERY, Participants, Quiescence, name_of
 
 if not os.path.exists('/proc/self/task/%d/schedstat' % os.getpid()):
@@ -160,6 +161,26 @@ def test_a_ros_node_is_named_by_its_name_argument_and_any_process_by_its_program
             process.kill()
             process.wait()
     assert name_of(node.pid) == 'a process gone (pid %d)' % node.pid
+
+
+def test_a_node_is_known_by_the_name_it_was_started_with_and_left_out_from_its_start():
+    # As roslaunch starts a node: __name:=, its namespace in ROS_NAMESPACE (or __ns:=); no master involved.
+    sleep = [sys.executable, '-c', 'import time; time.sleep(60)']
+    watcher = subprocess.Popen(sleep + ['__name:=rviz'], env=dict(os.environ, ROS_NAMESPACE='/robot1'))
+    moved = subprocess.Popen(sleep + ['__name:=rviz', '__ns:=/other/'], env=dict(os.environ, ROS_NAMESPACE='/robot1'))
+    plain = subprocess.Popen(sleep, env={k: v for k, v in os.environ.items() if k != 'ROS_NAMESPACE'})
+    try:
+        time.sleep(0.2)
+        assert (node_name(watcher.pid), node_name(moved.pid), node_name(plain.pid)) == (
+            '/robot1/rviz', '/other/rviz', None)
+        found = Participants(os.getpid(), exclude=lambda pids: {p for p in pids if node_name(p) == '/robot1/rviz'})
+        pids = found.pids()
+        assert watcher.pid not in pids and {moved.pid, plain.pid, os.getpid()} <= pids, pids
+    finally:
+        for process in (watcher, moved, plain):
+            process.kill()
+            process.wait()
+    assert node_name(watcher.pid) is None
 
 
 def test_a_child_slow_in_wall_time_but_not_computing_long_is_waited_for_not_missed(gate):

@@ -44,6 +44,7 @@ from std_msgs.msg import UInt32
 from closed_loop import netenv
 from closed_loop.batch.kept_graph import ROOT_VARIABLE
 from closed_loop.nodes.common import Publisher
+from closed_loop.participants import node_name
 from closed_loop.quiescence import EVERY, Participants, Quiescence
 from closed_loop.sim.scheduler import LEARN_S, command_delay_steps
 
@@ -91,11 +92,13 @@ class LaunchNodes:
         self._left_out = dict.fromkeys(self._watchers)
         self._known = {}
 
-    def left_out(self):
-        """The pids of rosout and the watchers, each looked up until it is found."""
+    def left_out(self, found=frozenset()):
+        """The pids of rosout and the watchers, each looked up until it is found: among the processes ``found``
+        by the node name they were started with (from their start, before they have told the master: a watcher
+        that computes as it starts, rviz, is not waited for then either), else through the master."""
         for name, pid in self._left_out.items():
             if pid is None:
-                self._left_out[name] = self._pid(name)
+                self._left_out[name] = next((p for p in found if node_name(p) == name), None) or self._pid(name)
         return (set(self._left_out.values()) | self._launchers) - {None}
 
     def has(self, caller_id):
