@@ -20,7 +20,6 @@ Results (JUnit XML and logs) go to ``test_output/``. The closing line is ``tests
 it needs: test/machine.py) and each failed; the exit status is non-zero if anything failed or nothing ran.
 """
 import argparse
-import concurrent.futures
 import functools
 import glob
 import os
@@ -84,8 +83,9 @@ def run_launch_checks(args):
         xml = os.path.join(results_dir, os.path.splitext(os.path.basename(path))[0] + '.xml')
         return xml, subprocess.run([script, '-o', xml, '-t', path], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                    cwd=ROOT)
-    with concurrent.futures.ThreadPoolExecutor(os.cpu_count() or 1) as pool:      # (each a process of its own)
-        checked = list(pool.map(check, files))
+    # One after another: no thread pool here (concurrent.futures' submit holds a lock of the module's that another
+    # thread's fork, with preexec_fn, once left released under it: "RuntimeError: release unlocked lock").
+    checked = [check(path) for path in files]
     for path, (xml, out) in zip(files, checked):
         name = os.path.splitext(os.path.basename(path))[0]
         p, f, _, _ = count_junit(xml) if os.path.exists(xml) else (0, 0, [], [])
@@ -320,10 +320,16 @@ def main():
     if not args.unit_only:
         parts.append(run_launch_checks)
     parts.append(run_all)
-    # The launch checks (one process at a time, 7 s) run beside the tests rather than before them.
+    # The launch checks (one process at a time, about 15 s) run beside the tests rather than before them.
     results = [None] * len(parts)
-    threads = [threading.Thread(target=lambda i=i, part=part: results.__setitem__(i, part(args)))
-               for i, part in enumerate(parts)]
+
+    def run_part(i, part):
+        try:
+            results[i] = part(args)
+        except Exception as error:      # (the runner's own failure: counted and named, the other part's kept)
+            results[i] = (0, 1, [], ['%s: the runner failed: %s: %s' % (part.__name__, type(error).__name__, error)])
+            raise
+    threads = [threading.Thread(target=run_part, args=(i, part)) for i, part in enumerate(parts)]
     for thread in threads:
         thread.start()
     for thread in threads:
