@@ -47,6 +47,7 @@ from closed_loop.nodes.common import Publisher
 from closed_loop.participants import node_name
 from closed_loop.quiescence import EVERY, Participants, Quiescence
 from closed_loop.sim.scheduler import LEARN_S, command_delay_steps
+from closed_loop.stall_watch import StallWatch
 
 #: The clock of a step's sensor messages, and of its timers: this much before and after the step's instant.
 BEFORE = AFTER = rospy.Duration(0, 1)
@@ -58,6 +59,9 @@ LEARN_HOLD_S, TICK_HOLD_S, SILENT_AFTER, HOLD_POLL_S = 0.002, 0.05, 3, 0.0002
 PAUSED_POLL_S = 0.01
 #: Wall time (s) a look-up of a subscriber's process may take.
 LOOKUP_S = 2.0
+#: Wall time (s) without a physics step (unpaused) after which the loop's stack is logged: a wait ends within
+#: BACKSTOP lockstep timeouts (20 s by default), so a stand this long is a hang to be shown where it is.
+STALL_S = 60.0
 
 
 
@@ -244,6 +248,8 @@ def run(node):
     gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
                       stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
     sim = None
+    watch = StallWatch(lambda: (id(node.sim), node.sim.time_s), lambda: node._paused or node._stopped.is_set(),
+                       lambda text: rospy.logwarn('sim_node: lockstep: %s', text), STALL_S).start()
     rospy.loginfo('sim_node: lockstep: each instant waits for the graph (a node computing at most %g s), commands '
                   'reach the wheels %s later', s.lockstep_timeout, _steps(command_delay_steps(s.command_delay,
                                                                                               node.sim.dt_s)))
@@ -326,4 +332,5 @@ def run(node):
                 node._publish_clock(rospy.Time(0, (k + 1) * step_ns) - BEFORE)
             sim.step()
     finally:
+        watch.stop()
         gate.close()
