@@ -112,9 +112,14 @@ def run_launch_checks(args):
 ALONE = ('test_tutorial', 'sim_wall', 'loop_wall', 'loop_fast', 'kill_controller', 'kill_sim', 'reconfigure',
          'episode_agreement', 'guard_reckless_wall', 'guard_reckless_obstacle_course', 'rviz_display')
 SIDE_BY_SIDE = 3
-#: The jobs beside the ALONE ones take only the CPU those leave: a process at niceness 19 weighs 15 against
-#: the 1024 of one at 0 (Linux's CFS), so an ALONE file's nodes run when they wake as on an idle machine.
-BESIDE_NICENESS = 19
+#: The jobs beside the ALONE ones take mostly the CPU those leave: a process at niceness 10 weighs 110 against the
+#: 1024 of one at 0 (Linux's CFS), so an ALONE file's nodes run when they wake nearly as on an idle machine.
+#: Not 19 (weight 15): where an ALONE file kept both cores busy, a lockstepped graph beside it, which needs each of
+#: its nodes to run in turn at every instant, stood still (the CI's avoid_goal_topic: 1.2 s of simulated time in
+#: 111 s of wall time, past its time-limit). Measured: avoid_goal_topic beside two busy processes at niceness 0 and
+#: three at its own, 220 s and failed at niceness 19, 34 s at 10 (14 s idle); each ALONE rostest passed at 0 beside
+#: three busy processes at niceness 10.
+BESIDE_NICENESS = 10
 #: System test files that run sweeps of graph episodes (two graphs at once each): they start first, and never
 #: two of them at the same time, so that the machine is not asked for six graphs at once.
 GRAPH_SWEEPS = ('test_graph_cleanup', 'test_own_controller', 'test_graph_agreement', 'test_failure_report')
