@@ -62,7 +62,10 @@ LOOKUP_S = 2.0
 #: Wall time (s) without a physics step (unpaused) after which the loop's stack is logged: a wait ends within
 #: BACKSTOP lockstep timeouts (20 s by default), so a stand this long is a hang to be shown where it is.
 STALL_S = 60.0
-
+#: Where simulated time goes on by less than this share of the wall time over STALL_S, a warning says so: a run
+#: that crawls (each instant needs every node to run in turn, and a busy machine or a low CPU priority keeps
+#: them from it) looks like a hang from outside (a CI's rostest at niceness 19: 1.2 s in 111 s of wall time).
+SLOW_PACE = 0.05
 
 
 def missed_publisher():
@@ -248,8 +251,13 @@ def run(node):
     gate = Quiescence(node.launch_nodes.participants, s.lockstep_timeout,
                       stopping=lambda: node._stopped.is_set() or rospy.is_shutdown())
     sim = None
+    def slow(gone_on, wall_s):
+        rospy.logwarn('sim_node: lockstep: %.2f s of simulated time in the last %.0f s of wall time (%.3fx real time): '
+                      "the graph's nodes are slow to answer, or kept from the CPU (a busy machine, a niceness, a CPU "
+                      'limit); %d instants missed so far', gone_on, wall_s, gone_on / wall_s, gate.missed)
     watch = StallWatch(lambda: (id(node.sim), node.sim.time_s), lambda: node._paused or node._stopped.is_set(),
-                       lambda text: rospy.logwarn('sim_node: lockstep: %s', text), STALL_S).start()
+                       lambda text: rospy.logwarn('sim_node: lockstep: %s', text), STALL_S,
+                       pace=(lambda: node.sim.time_s, SLOW_PACE, slow)).start()
     rospy.loginfo('sim_node: lockstep: each instant waits for the graph (a node computing at most %g s), commands '
                   'reach the wheels %s later', s.lockstep_timeout, _steps(command_delay_steps(s.command_delay,
                                                                                               node.sim.dt_s)))
