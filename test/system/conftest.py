@@ -121,16 +121,28 @@ def kill_group(process):
         process.wait(5)
 
 
-def wait_for(predicate, timeout_s, what, poll_s=0.1):
+def wait_for(predicate, timeout_s, what, poll_s=0.1, log=None):
     """``predicate()``'s value once it is true, polled every ``poll_s``; AssertionError naming ``what`` after
-    ``timeout_s`` (a bound that only catches hangs)."""
+    ``timeout_s`` (a bound that only catches hangs), with the end of the file ``log`` where one is given (it lies in
+    the test's own folder, which pytest removes a few runs later)."""
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
         found = predicate()
         if found:
             return found
         time.sleep(poll_s)
-    raise AssertionError('%s: not within %g s' % (what, timeout_s))
+    tail = ''
+    if log is not None:
+        try:
+            with open(str(log), errors='replace') as f:
+                tail = '\n--- the end of %s ---\n%s' % (log, f.read()[-LOG_TAIL_CHARS:])
+        except OSError as error:
+            tail = '\n(%s)' % error
+    raise AssertionError('%s: not within %g s%s' % (what, timeout_s, tail))
+
+
+#: How much of a log's end a failed wait shows.
+LOG_TAIL_CHARS = 6000
 
 
 @pytest.fixture

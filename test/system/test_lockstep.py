@@ -29,14 +29,14 @@ PAUSE_S = 3 * StopSettings().scan_timeout
 
 def scenario(env, tmp_path, name):
     """scenario.launch with stop_on_obstacle in ``wall``, judged for TIME_LIMIT_S; its verdict (dict)."""
-    verdict = tmp_path / (name + '.json')
-    with open(str(tmp_path / (name + '.log')), 'w') as log:
+    verdict, log_path = tmp_path / (name + '.json'), tmp_path / (name + '.log')
+    with open(str(log_path), 'w') as log:
         launch = subprocess.Popen(['roslaunch', 'closed_loop', 'scenario.launch', 'world:=wall',
                                    'controller_pkg:=closed_loop', 'controller_type:=stop_on_obstacle',
                                    'time_limit:=%g' % TIME_LIMIT_S, 'end_at_rest:=false', 'verdict_file:=%s' % verdict],
                                   env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        wait_for(verdict.exists, 120, 'the verdict of %s (%s.log)' % (name, name))
+        wait_for(verdict.exists, 120, 'the verdict of %s' % name, log=log_path)
     finally:
         stop(launch)
     return json.loads(verdict.read_text())

@@ -180,7 +180,8 @@ def test_a_sweep_on_several_machines_gets_everything_back_and_only_the_right_cli
     with open(str(other / 'closed_loop' / 'geometry.py'), 'a') as f:
         f.write('# another version\n')
     start_worker('w3', str(other))
-    wait_for(lambda: log_path.read_text().count('Register worker') >= 3, 120, 'w3 registered', poll_s=0.5)
+    wait_for(lambda: log_path.read_text().count('Register worker') >= 3, 120, 'w3 registered', poll_s=0.5,
+             log=log_path)
     again = sweep_in_client(net, [str(spec), '--output', str(client_dir / 'again'), '--scheduler', address,
                                   '--tls', str(certs)])
     text, _ = again.communicate(timeout=120)
