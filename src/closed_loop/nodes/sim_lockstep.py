@@ -125,11 +125,15 @@ class LaunchNodes:
 
     @staticmethod
     def _pid(caller_id):
+        # (Both calls bounded: rosgraph.Master's own waits for the master for ever, in the simulator's loop.)
         try:
-            uri = rosgraph.Master(rospy.get_name()).lookupNode(caller_id)
+            code, _, uri = netenv.bounded_proxy(rosgraph.get_master_uri(), LOOKUP_S).lookupNode(rospy.get_name(),
+                                                                                               caller_id)
+            if code != 1:
+                return None
             code, _, pid = netenv.bounded_proxy(uri, LOOKUP_S).getPid(rospy.get_name())
             return pid if code == 1 else None
-        except (rosgraph.MasterException, OSError, xmlrpc.client.Error, ValueError):
+        except (OSError, xmlrpc.client.Error, ValueError, TypeError):
             return None
 
 
